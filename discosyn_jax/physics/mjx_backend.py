@@ -1,0 +1,47 @@
+"""MJX: MuJoCo in JAX, the accelerator path (Warp's implementation where installed)."""
+
+from __future__ import annotations
+
+import importlib.util
+
+import jax
+import jax.numpy as jnp
+import mujoco
+from mujoco import mjx
+
+from discosyn_jax.physics import PhysicsView
+
+
+def default_impl() -> str:
+  """"warp" on a GPU with mujoco_warp installed, else MJX's JAX implementation."""
+  if jax.default_backend() == "gpu" and importlib.util.find_spec("mujoco_warp"):
+    return "warp"
+  return "jax"
+
+
+class MjxBackend:
+  name = "mjx"
+
+  def __init__(self, model: mujoco.MjModel, n_substeps: int, impl: str | None = None):
+    self.mj_model = model
+    self.n_substeps = int(n_substeps)
+    self.impl = impl or default_impl()
+    self.model = mjx.put_model(model, impl=self.impl)
+    self._data0 = mjx.make_data(self.model, impl=self.impl)
+
+  def init(self, qpos: jax.Array, qvel: jax.Array) -> mjx.Data:
+    data = self._data0.replace(qpos=qpos.astype(jnp.float32), qvel=qvel.astype(jnp.float32))
+    return mjx.forward(self.model, data)
+
+  def step(self, data: mjx.Data, ctrl: jax.Array) -> mjx.Data:
+    data = data.replace(ctrl=ctrl.astype(data.ctrl.dtype))
+    return jax.lax.fori_loop(0, self.n_substeps, lambda _, d: mjx.step(self.model, d), data)
+
+  def view(self, data: mjx.Data) -> PhysicsView:
+    return PhysicsView(qpos=data.qpos, qvel=data.qvel, sensordata=data.sensordata)
+
+  def to_mjdata(self, data: mjx.Data) -> mujoco.MjData:
+    """One environment's state as an MjData (forward evaluated), e.g. for rendering."""
+    out = mjx.get_data(self.mj_model, data)
+    mujoco.mj_forward(self.mj_model, out)
+    return out

@@ -1,0 +1,70 @@
+"""What a task is: a scene plus pure JAX functions of the physics view.
+
+A task never touches a backend's structures: every method below reads a `PhysicsView`
+(qpos, qvel, sensors) and the task's own `info` dict, so one task code runs on both
+physics backends.
+"""
+
+from __future__ import annotations
+
+import abc
+import dataclasses
+from typing import Any
+
+import jax
+import mujoco
+
+from discosyn_jax import scene
+from discosyn_jax.physics import PhysicsView
+
+Info = dict[str, Any]
+
+
+@dataclasses.dataclass(frozen=True)
+class TaskConfig:
+  """What every task has; task families subclass it with their own fields."""
+
+  episode_length: int = 100  # control steps of 0.04 s: 4 s
+  n_substeps: int = 10  # physics steps of 0.004 s per control step
+  hand_noise: float = 0.05  # rad, uniform noise on the initial hand joint angles
+
+
+class Task(abc.ABC):
+  scene: str  # xml/scenes/<scene>.xml
+
+  def __init__(self, config: TaskConfig):
+    self.config = config
+
+  def build_model(self) -> mujoco.MjModel:
+    spec = scene.load_spec(self.scene)
+    self.edit_spec(spec)
+    model = spec.compile()
+    self.dt = float(model.opt.timestep) * self.config.n_substeps  # one control step, s
+    self.bind(model)
+    return model
+
+  def edit_spec(self, spec: mujoco.MjSpec) -> None:
+    """Set config-dependent parameters of the scene before it is compiled."""
+
+  def bind(self, model: mujoco.MjModel) -> None:
+    """Look up the indices the pure functions need (called once, on the host)."""
+
+  @abc.abstractmethod
+  def initial_state(self, rng: jax.Array, model: mujoco.MjModel) -> tuple[jax.Array, jax.Array, Info]:
+    """(qpos, qvel, info) of a fresh episode."""
+
+  @abc.abstractmethod
+  def observation(self, view: PhysicsView, info: Info) -> jax.Array: ...
+
+  @abc.abstractmethod
+  def reward_terms(self, prev: PhysicsView, view: PhysicsView, info: Info) -> dict[str, jax.Array]:
+    """Reward of the transition prev -> view, as named terms that sum to the reward."""
+
+  @abc.abstractmethod
+  def success(self, view: PhysicsView, info: Info) -> jax.Array:
+    """1.0 where the episode counts as solved if it ended in this state, else 0.0."""
+
+  def terminated(self, view: PhysicsView, info: Info) -> jax.Array:
+    """1.0 where the episode ends before its time limit (e.g. a dropped object)."""
+    del view, info
+    return jax.numpy.zeros(())

@@ -1,0 +1,62 @@
+"""The task registry: `make(name)` builds a task's environment; TASK_SETS groups them."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Callable
+
+import discosyn_jax  # noqa: F401  (sets XLA flags before jax is imported)
+from discosyn_jax.env import HandEnv
+from discosyn_jax.task import Task, TaskConfig
+from tasks import valve
+
+
+@dataclasses.dataclass(frozen=True)
+class Entry:
+  task: Callable[[TaskConfig], Task]
+  default_config: Callable[..., TaskConfig]
+  summary: str
+
+
+REGISTRY: dict[str, Entry] = {
+    "valve0": Entry(valve.Valve, lambda **kw: valve.default_config(arms=0, **kw),
+                    "turn a bare vertical stem counter-clockwise"),
+    "valve1": Entry(valve.Valve, lambda **kw: valve.default_config(arms=1, **kw),
+                    "turn a one-armed (L) valve counter-clockwise"),
+    "valve2": Entry(valve.Valve, lambda **kw: valve.default_config(arms=2, **kw),
+                    "turn a two-armed (T) valve counter-clockwise"),
+    "valve3": Entry(valve.Valve, lambda **kw: valve.default_config(arms=3, **kw),
+                    "turn a three-armed valve counter-clockwise"),
+}
+
+TASK_SETS: dict[str, tuple[str, ...]] = {
+    "set1": ("valve0", "valve1", "valve2", "valve3"),
+}
+
+
+def entry(name: str) -> Entry:
+  if name not in REGISTRY:
+    raise ValueError(f"unknown task {name!r}; known tasks: {', '.join(REGISTRY)}")
+  return REGISTRY[name]
+
+
+def make_config(name: str, **overrides) -> TaskConfig:
+  defaults = entry(name).default_config()
+  fields = {f.name for f in dataclasses.fields(defaults)}
+  unknown = sorted(set(overrides) - fields)
+  if unknown:
+    raise ValueError(f"task {name!r} has no setting {', '.join(unknown)}; "
+                     f"its settings: {', '.join(sorted(fields))}")
+  return dataclasses.replace(defaults, **overrides)
+
+
+def make(name: str, *, backend: str = "auto", **overrides) -> HandEnv:
+  """The environment of task `name` on `backend` ("auto", "native" or "mjx").
+
+  `overrides` replace fields of the task's default config (e.g. frictionloss=0.2).
+  """
+  return HandEnv(entry(name).task(make_config(name, **overrides)), backend=backend)
+
+
+def sets_of(name: str) -> list[str]:
+  return [s for s, names in TASK_SETS.items() if name in names]
