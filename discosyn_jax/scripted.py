@@ -1,6 +1,6 @@
 """A hand-written turning motion: proof that a deliberate policy can turn the valves.
 
-Strokes of 2 s: fingers straight and the wrist swung clockwise (WRJ1 low), the four
+Strokes of 1.33 s: fingers straight and the wrist swung clockwise (WRJ1 low), the four
 fingers dipped into the valve's plane, then the wrist swung counter-clockwise (WRJ1 up),
 which drags whatever the fingers hold or touch counter-clockwise about the valve's axis.
 """
@@ -16,8 +16,8 @@ _FLEX = ("FFJ2", "MFJ2", "RFJ2", "LFJ2")
 _CURL = ("FFJ1", "MFJ1", "RFJ1", "LFJ1")
 
 
-def grasp_and_sweep(steps: int, dt: float, stroke_s: float = 2.0, dip: float = 0.5,
-                    curl: float = -0.2) -> np.ndarray:
+def grasp_and_sweep(steps: int, dt: float, stroke_s: float = 1.33, dip: float = 0.0,
+                    curl: float = 0.3) -> np.ndarray:
   """(steps, 20) actions in [-1, 1]; `dip` and `curl` are the J2 and J1 actions when down."""
   actions = np.full((steps, len(hand.ACTUATED)), -1.0)  # straight fingers, joints at a limit
   for name in ("FFJ3", "MFJ3", "RFJ3", "LFJ3", "LFJ4", "THJ2", "THJ1", "WRJ0"):

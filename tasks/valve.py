@@ -14,6 +14,7 @@ more than turning it steadily.
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import jax
 import jax.numpy as jnp
@@ -33,7 +34,7 @@ class ValveConfig(TaskConfig):
   max_rewarded_speed: float = 2.0  # rad/s, w_max
   damping: float = 0.5  # N m s / rad at the hinge
   frictionloss: float = 0.15  # N m at the hinge: it holds against light touches
-  success_turn: float = 1.0  # rad of net turn in the commanded direction
+  success_turn: float = math.pi / 4  # rad of net turn in the commanded direction
 
 
 def default_config(**overrides) -> ValveConfig:
@@ -56,7 +57,7 @@ class Valve(Task):
   def bind(self, model: mujoco.MjModel) -> None:
     self._hand_q = jnp.asarray(hand.qpos_indices(model))
     self.valve_qpos = self._valve_q = int(model.jnt_qposadr[model.joint("valve").id])
-    self._valve_v = int(model.jnt_dofadr[model.joint("valve").id])
+    self.valve_qvel = self._valve_v = int(model.jnt_dofadr[model.joint("valve").id])
     self._qpos0 = jnp.asarray(model.qpos0, jnp.float32)
     hand_ids = [model.joint(j).id for j in hand.JOINTS]
     self._lo = jnp.asarray(model.jnt_range[hand_ids, 0], jnp.float32)

@@ -1,0 +1,122 @@
+"""Task set #1: every valve on both backends; rewards, success, and physical sanity."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import tasks
+from discosyn_jax import hand, scripted
+from tests.helpers import run_episode, uniform_policy
+
+SET1 = tasks.TASK_SETS["set1"]
+
+
+@pytest.mark.parametrize("backend", ["native", "mjx"])
+@pytest.mark.parametrize("name", SET1)
+def test_jitted_reset_and_step(name, backend):
+  env = tasks.make(name, backend=backend)
+  keys = jax.random.split(jax.random.PRNGKey(0), 2)
+  final, states = run_episode(env, keys, uniform_policy, steps=3)
+  assert states.obs.shape == (3, 2, env.observation_size) == (3, 2, 27)
+  assert states.reward.shape == states.done.shape == (3, 2)
+  for leaf in jax.tree.leaves((states.obs, states.reward, states.metrics)):
+    assert np.isfinite(np.asarray(leaf)).all()
+  assert set(states.metrics) == {"reward/turn", "reward/bias", "success", "diverged"}
+  assert not np.asarray(states.done).any()
+
+
+@pytest.fixture(scope="module")
+def random_rollouts():
+  """32 episodes of a uniform random policy on each valve (native backend)."""
+  out = {}
+  for name in SET1:
+    env = tasks.make(name, backend="native")
+    out[name] = (env, *run_episode(env, jax.random.split(jax.random.PRNGKey(1), 32), uniform_policy))
+  return out
+
+
+@pytest.mark.parametrize("name", SET1)
+def test_random_policy_rarely_succeeds(random_rollouts, name):
+  _, final, _ = random_rollouts[name]
+  assert float(final.metrics["success"].mean()) <= 0.05
+
+
+@pytest.mark.parametrize("name", SET1)
+def test_random_policy_moves_like_a_hand_not_a_paddle(random_rollouts, name):
+  """Peak joint speed and contact penetration stay physical under random flailing.
+
+  Bounds: hand joints below 20 rad/s (the calibration measured 14 at most), the valve
+  below 6 rad/s, and no hand-valve penetration deeper than 8 mm (measured: 5.3 mm at most over 256
+  episodes of each valve, experiments/valve_calibration.py).
+  """
+  import mujoco
+
+  env, _, states = random_rollouts[name]
+  qvel = np.asarray(states.pipeline_state.qvel)
+  assert np.abs(qvel[..., hand.qvel_indices(env.mj_model)]).max() < 20.0
+  assert np.abs(qvel[..., env.task.valve_qvel]).max() < 6.0
+  data = mujoco.MjData(env.mj_model)
+  raws = np.asarray(states.pipeline_state.raw).reshape(-1, states.pipeline_state.raw.shape[-1])
+  deepest = 0.0
+  for raw in raws[::7]:
+    mujoco.mj_setState(env.mj_model, data, raw.view(np.float64), mujoco.mjtState.mjSTATE_INTEGRATION)
+    mujoco.mj_forward(env.mj_model, data)
+    if data.ncon:
+      deepest = max(deepest, -data.contact.dist[: data.ncon].min())
+  assert deepest < 0.008
+
+
+def _start_at(env, state, angle):
+  """The same episode start, with the valve at `angle`."""
+  qpos = state.pipeline_state.qpos.at[env.task.valve_qpos].set(angle)
+  pstate = env.physics.init(qpos, jnp.zeros_like(state.pipeline_state.qvel))
+  return state.replace(pipeline_state=pstate, info={**state.info, "start_angle": jnp.float32(angle)})
+
+
+def _scripted_episode(env, angle):
+  actions = jnp.asarray(scripted.grasp_and_sweep(env.episode_length, env.dt))
+
+  def go(key):
+    state = _start_at(env, env.reset(key), angle)
+    return jax.lax.scan(lambda s, a: (env.step(s, a),) * 2, state, actions)[1]
+
+  return jax.jit(go)(jax.random.PRNGKey(0))
+
+
+@pytest.mark.parametrize("direction", [1.0, -1.0])
+def test_valve_turns_when_pushed_and_reward_follows_the_turn(direction):
+  env = tasks.make("valve3", backend="native", direction=direction)
+  start = 0.5  # an arm lies under the sweeping fingers (from 0.0 the sweep misses)
+  states = _scripted_episode(env, angle=start)
+  turned = float(states.pipeline_state.qpos[-1, env.task.valve_qpos]) - start
+  assert turned > 0.9  # the scripted sweep turns valve3 counter-clockwise (1.14 rad measured)
+  rewards = np.asarray(states.metrics["reward/turn"])
+  assert np.sign(rewards.sum()) == direction
+  # per step: the turn reward has the sign of the step's turn times the direction
+  angles = np.concatenate([[start], np.asarray(states.pipeline_state.qpos[:, env.task.valve_qpos])])
+  moving = np.abs(np.diff(angles)) > 1e-3
+  assert (np.sign(rewards[moving]) == direction * np.sign(np.diff(angles)[moving])).all()
+  success = np.asarray(states.metrics["success"])[-1]
+  assert success == float(direction * turned >= env.task.config.success_turn)
+
+
+def test_reward_is_capped_and_success_needs_the_threshold():
+  env = tasks.make("valve3", backend="native")
+  task, view = env.task, None
+  state = env.reset(jax.random.PRNGKey(0))
+  view = env.physics.view(state.pipeline_state)
+  for turn, expected in [(0.01, 0.01 / env.dt), (-0.01, -0.01 / env.dt), (1.0, 2.0), (-1.0, -2.0)]:
+    moved = view.replace(qpos=view.qpos.at[task.valve_qpos].add(turn))
+    np.testing.assert_allclose(task.reward_terms(view, moved, state.info)["turn"], expected, rtol=1e-3)
+  start = state.info["start_angle"]
+  for turn, solved in [(0.7, 0.0), (0.8, 1.0), (-2.0, 0.0)]:
+    moved = view.replace(qpos=view.qpos.at[task.valve_qpos].set(start + turn))
+    assert float(task.success(moved, state.info)) == solved
+
+
+def test_initial_states_are_random():
+  env = tasks.make("valve3", backend="native")
+  states = jax.vmap(env.reset)(jax.random.split(jax.random.PRNGKey(0), 4))
+  assert len(np.unique(np.asarray(states.info["start_angle"]))) == 4
+  assert np.ptp(np.asarray(states.obs[:, :24]), axis=0).max() > 0
