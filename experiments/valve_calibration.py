@@ -15,11 +15,11 @@ import itertools
 
 import jax
 import jax.numpy as jnp
-import mujoco
 import numpy as np
 
 import tasks
 from discosyn_jax import hand, scripted
+from discosyn_jax.physics.native import deepest_penetration
 
 
 def rollout(env, actions_fn, episodes: int, seed: int):
@@ -39,17 +39,6 @@ def rollout(env, actions_fn, episodes: int, seed: int):
   return start, np.stack(angles, 1), np.stack(qvels, 1), np.stack(raws, 1), np.asarray(state.metrics["success"])
 
 
-def max_penetration(model: mujoco.MjModel, raws: np.ndarray, stride: int = 5) -> float:
-  data = mujoco.MjData(model)
-  deepest = 0.0
-  for raw in raws.reshape(-1, raws.shape[-1])[::stride]:
-    mujoco.mj_setState(model, data, raw.view(np.float64), mujoco.mjtState.mjSTATE_INTEGRATION)
-    mujoco.mj_forward(model, data)
-    if data.ncon:
-      deepest = max(deepest, -float(data.contact.dist[: data.ncon].min()))
-  return deepest
-
-
 def report(name, env, start, angles, qvels, raws, success):
   hand_v = hand.qvel_indices(env.mj_model)
   net = angles[:, -1] - start
@@ -58,7 +47,7 @@ def report(name, env, start, angles, qvels, raws, success):
         f"net p99 {np.percentile(net, 99):5.2f}  joint speed p99/max "
         f"{np.percentile(np.abs(qvels[..., hand_v]), 99):5.1f}/{np.abs(qvels[..., hand_v]).max():5.1f} rad/s  "
         f"valve speed max {valve_speed.max():5.1f} rad/s  penetration max "
-        f"{1000 * max_penetration(env.mj_model, raws):5.1f} mm", flush=True)
+        f"{1000 * deepest_penetration(env.mj_model, raws, stride=5):5.1f} mm", flush=True)
 
 
 def main():

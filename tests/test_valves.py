@@ -7,6 +7,7 @@ import pytest
 
 import tasks
 from discosyn_jax import hand, scripted
+from discosyn_jax.physics.native import deepest_penetration
 from tests.helpers import run_episode, uniform_policy
 
 SET1 = tasks.TASK_SETS["set1"]
@@ -50,21 +51,11 @@ def test_random_policy_moves_like_a_hand_not_a_paddle(random_rollouts, name):
   below 6 rad/s, and no hand-valve penetration deeper than 8 mm (measured: 5.3 mm at most over 256
   episodes of each valve, experiments/valve_calibration.py).
   """
-  import mujoco
-
   env, _, states = random_rollouts[name]
   qvel = np.asarray(states.pipeline_state.qvel)
   assert np.abs(qvel[..., hand.qvel_indices(env.mj_model)]).max() < 20.0
   assert np.abs(qvel[..., env.task.valve_qvel]).max() < 6.0
-  data = mujoco.MjData(env.mj_model)
-  raws = np.asarray(states.pipeline_state.raw).reshape(-1, states.pipeline_state.raw.shape[-1])
-  deepest = 0.0
-  for raw in raws[::7]:
-    mujoco.mj_setState(env.mj_model, data, raw.view(np.float64), mujoco.mjtState.mjSTATE_INTEGRATION)
-    mujoco.mj_forward(env.mj_model, data)
-    if data.ncon:
-      deepest = max(deepest, -data.contact.dist[: data.ncon].min())
-  assert deepest < 0.008
+  assert deepest_penetration(env.mj_model, states.pipeline_state.raw, stride=7) < 0.008
 
 
 def _start_at(env, state, angle):

@@ -108,3 +108,16 @@ class NativeBackend:
     mujoco.mj_setState(self.mj_model, data, np.asarray(state.raw).view(np.float64), _INTEGRATION)
     mujoco.mj_forward(self.mj_model, data)
     return data
+
+
+def deepest_penetration(model: mujoco.MjModel, raw: np.ndarray, stride: int = 1) -> float:
+  """Deepest contact penetration (m) over native states `raw` (..., 2 * nstate), every
+  `stride`-th state: a check that contacts stay stiff enough for manipulation."""
+  data = mujoco.MjData(model)
+  deepest = 0.0
+  for row in np.asarray(raw).reshape(-1, raw.shape[-1])[::stride]:
+    mujoco.mj_setState(model, data, row.view(np.float64), _INTEGRATION)
+    mujoco.mj_forward(model, data)
+    if data.ncon:
+      deepest = max(deepest, -float(data.contact.dist[: data.ncon].min()))
+  return deepest

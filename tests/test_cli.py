@@ -1,0 +1,28 @@
+"""The discosyn command: listing, the demo, bad input."""
+
+import subprocess
+import sys
+
+from discosyn_jax import cli
+
+
+def test_tasks_lists_every_task_with_sizes(capsys):
+  assert cli.main(["tasks"]) == 0
+  out = capsys.readouterr().out
+  for name in ("valve0", "valve1", "valve2", "valve3"):
+    (line,) = [l for l in out.splitlines() if l.startswith(name + " ")]
+    assert line.split()[1:4] == ["27", "20", "set1"]
+
+
+def test_demo_prints_a_row_per_task(capsys):
+  assert cli.main(["demo", "valve1", "--batch", "2"]) == 0
+  rows = [l for l in capsys.readouterr().out.splitlines() if l.startswith("valve1")]
+  assert len(rows) == 1 and rows[0].split()[1] == "native"
+
+
+def test_bad_input_is_one_line_and_exit_2():
+  for argv in (["demo", "valve7"], ["demo", "valve1", "--batch", "0"]):
+    out = subprocess.run([sys.executable, "-m", "discosyn_jax.cli", *argv], capture_output=True, text=True)
+    assert out.returncode == 2
+    errors = [l for l in out.stderr.splitlines() if l.startswith("discosyn: error:")]
+    assert len(errors) == 1, out.stderr
