@@ -56,8 +56,8 @@ class Valve(Task):
 
   def bind(self, model: mujoco.MjModel) -> None:
     self._hand_q = jnp.asarray(hand.qpos_indices(model))
-    self.valve_qpos = self._valve_q = int(model.jnt_qposadr[model.joint("valve").id])
-    self.valve_qvel = self._valve_v = int(model.jnt_dofadr[model.joint("valve").id])
+    self.valve_qpos = int(model.jnt_qposadr[model.joint("valve").id])
+    self.valve_qvel = int(model.jnt_dofadr[model.joint("valve").id])
     self._qpos0 = jnp.asarray(model.qpos0, jnp.float32)
     hand_ids = [model.joint(j).id for j in hand.JOINTS]
     self._lo = jnp.asarray(model.jnt_range[hand_ids, 0], jnp.float32)
@@ -69,17 +69,17 @@ class Valve(Task):
     noise = self.config.hand_noise * jax.random.uniform(k_hand, self._hand_q.shape, minval=-1, maxval=1)
     hand_q = jnp.clip(self._qpos0[self._hand_q] + noise, self._lo, self._hi)
     angle = jax.random.uniform(k_valve, (), minval=-jnp.pi, maxval=jnp.pi)
-    qpos = self._qpos0.at[self._hand_q].set(hand_q).at[self._valve_q].set(angle)
+    qpos = self._qpos0.at[self._hand_q].set(hand_q).at[self.valve_qpos].set(angle)
     return qpos, jnp.zeros(self._nv, jnp.float32), {"start_angle": angle}
 
   def angle(self, view: PhysicsView) -> jax.Array:
-    return view.qpos[self._valve_q]
+    return view.qpos[self.valve_qpos]
 
   def observation(self, view: PhysicsView, info: Info) -> jax.Array:
     angle = self.angle(view)
     return jnp.concatenate([
         view.qpos[self._hand_q],
-        jnp.stack([jnp.cos(angle), jnp.sin(angle), view.qvel[self._valve_v]]),
+        jnp.stack([jnp.cos(angle), jnp.sin(angle), view.qvel[self.valve_qvel]]),
     ])
 
   def reward_terms(self, prev: PhysicsView, view: PhysicsView, info: Info) -> dict[str, jax.Array]:
