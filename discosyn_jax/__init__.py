@@ -9,3 +9,21 @@ if _FLAG.split("=")[0] not in _os.environ.get("XLA_FLAGS", ""):
   _os.environ["XLA_FLAGS"] = (_os.environ.get("XLA_FLAGS", "") + " " + _FLAG).strip()
 
 __version__ = "0.1.0"
+
+
+def _import_mjx_quietly() -> None:
+  """mujoco.mjx prints "Failed to import warp" on stdout wherever the optional Warp
+  package is absent (the CPU path never needs it); keep that line out of our output."""
+  import contextlib
+  import io
+  import sys
+
+  captured = io.StringIO()
+  with contextlib.redirect_stdout(captured):
+    import mujoco.mjx  # noqa: F401
+  for line in captured.getvalue().splitlines():
+    if not line.startswith(("Failed to import warp", "Failed to import mujoco_warp")):
+      print(line, file=sys.stdout)
+
+
+_import_mjx_quietly()

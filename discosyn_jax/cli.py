@@ -1,4 +1,4 @@
-"""The `discosyn` command: demo, tasks, render-scenes."""
+"""The `discosyn` command: train, eval, tasks, demo, render-scenes."""
 
 from __future__ import annotations
 
@@ -99,9 +99,83 @@ def cmd_render_scenes(args) -> None:
     print(path)
 
 
+# train flags -> TrainConfig fields; a flag left out keeps the preset's value
+_TRAIN_FLAGS = {
+    "synergies": "n_synergies", "decoder": "decoder", "alpha1": "alpha1", "alpha2": "alpha2",
+    "alpha3": "alpha3", "num_envs": "num_envs", "unroll_length": "unroll_length",
+    "minibatches": "num_minibatches", "epochs": "update_epochs", "lr": "learning_rate",
+    "steps": "steps", "seed": "seed", "backend": "backend", "eval_every": "eval_every",
+    "eval_envs": "eval_envs", "checkpoint_every": "checkpoint_every",
+}
+
+
+def train_config(args):
+  """The preset with the flags given on the command line applied."""
+  from discosyn_jax.config import TrainConfig
+  from experiments import presets
+
+  config: TrainConfig = presets.preset(args.preset)
+  changes = {field: getattr(args, flag) for flag, field in _TRAIN_FLAGS.items()
+             if getattr(args, flag) is not None}
+  if args.tasks:
+    changes["tasks"] = tuple(_task_names(args.tasks))
+  return config.replace(**changes).validate()
+
+
+def cmd_train(args) -> None:
+  from discosyn_jax import loop
+
+  config = train_config(args)
+  out = pathlib.Path(args.out or f"runs/{args.preset}-seed{config.seed}")
+  print(f"run directory: {out}")
+  loop.train(config, out, resume=args.resume, force=args.force, progress=not args.no_progress)
+
+
+def cmd_eval(args) -> None:
+  import jax
+
+  from discosyn_jax import loop
+  from discosyn_jax.train import Trainer
+
+  config, checkpoint = loop.load_run(pathlib.Path(args.run))
+  changes = {"backend": args.backend} if args.backend else {}
+  if args.episodes is not None:
+    changes["eval_envs"] = args.episodes
+  config = config.replace(**changes).validate()
+  trainer = Trainer(config)
+  state = loop.restore(trainer, checkpoint)
+  results = loop.evaluate(trainer, state)
+  steps = int(jax.device_get(state.step))
+  print(loop.format_table(results, f"evaluation at step {steps} ({steps * config.env_steps_per_train_step:,} "
+                                   f"env steps, {config.eval_envs} deterministic episodes per task)"))
+
+
 def build_parser() -> argparse.ArgumentParser:
   parser = argparse.ArgumentParser(prog="discosyn", description=__doc__)
   sub = parser.add_subparsers(dest="command", required=True)
+
+  p = sub.add_parser("train", help="train synergies and policies (a preset, flags replace fields)")
+  p.add_argument("--preset", default="quickstart", help="a preset of experiments/presets.py")
+  p.add_argument("--tasks", nargs="+", help="tasks or task sets (default: the preset's)")
+  p.add_argument("--synergies", type=int, help="synergy count b (1-20)")
+  p.add_argument("--decoder", help="linear | mlp | identity (full-action PPO)")
+  for name in ("alpha1", "alpha2", "alpha3", "lr"):
+    p.add_argument(f"--{name}", type=float)
+  for name in ("num-envs", "unroll-length", "minibatches", "epochs", "steps", "seed",
+               "eval-every", "eval-envs", "checkpoint-every"):
+    p.add_argument(f"--{name}", type=int)
+  p.add_argument("--backend", choices=["auto", "native", "mjx"])
+  p.add_argument("--out", help="run directory (default: runs/<preset>-seed<seed>)")
+  p.add_argument("--resume", action="store_true", help="continue the run in --out")
+  p.add_argument("--force", action="store_true", help="replace the run in --out")
+  p.add_argument("--no-progress", action="store_true", help="no progress bar")
+  p.set_defaults(fn=cmd_train)
+
+  p = sub.add_parser("eval", help="evaluate a run (its latest checkpoint) or one checkpoint")
+  p.add_argument("run", help="a run directory or a checkpoint folder in one")
+  p.add_argument("--episodes", type=int, help="episodes per task (default: the run's eval_envs)")
+  p.add_argument("--backend", choices=["auto", "native", "mjx"])
+  p.set_defaults(fn=cmd_eval)
 
   p = sub.add_parser("demo", help="build task scenes, step them with random actions, print figures")
   p.add_argument("tasks", nargs="*", default=["set1"], help="tasks or task sets (default: set1)")
@@ -123,6 +197,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+  from discosyn_jax.loop import TrainingDiverged
+
   args = build_parser().parse_args(argv)
   try:
     if getattr(args, "batch", 1) < 1:
@@ -131,6 +207,9 @@ def main(argv: list[str] | None = None) -> int:
   except (UsageError, ValueError) as err:
     print(f"discosyn: error: {err}", file=sys.stderr)
     return 2
+  except TrainingDiverged as err:  # the run stopped; its checkpoints are kept
+    print(f"discosyn: {err}", file=sys.stderr)
+    return 1
   return 0
 
 

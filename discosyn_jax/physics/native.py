@@ -5,6 +5,11 @@ ctrl, ...) travels through JAX as float64 bit-cast to uint32 pairs, so it round-
 exactly with x64 off and a trajectory equals plain `mj_step` on one MjData. The callback
 is vectorised (`vmap_method="broadcast_all"`): under vmap it receives every environment
 of the batch in one call and steps them on a thread pool.
+
+Divergence: where accelerations or velocities blow up, MuJoCo's C engine does not produce
+NaN; it resets the simulation with a warning. Stepping through `Batch.rollout`, which stops
+a simulation whose warnings rise, shows it as a substep whose time did not advance; such an
+environment comes back with NaN qpos, which `HandEnv` reports as diverged (and ends).
 """
 
 from __future__ import annotations
@@ -22,6 +27,8 @@ from flax import struct
 from discosyn_jax.physics import PhysicsView
 
 _INTEGRATION = mujoco.mjtState.mjSTATE_INTEGRATION
+_CTRL = mujoco.mjtState.mjSTATE_CTRL
+_TIME = mujoco.mjtState.mjSTATE_TIME
 
 
 @struct.dataclass
@@ -82,10 +89,17 @@ class NativeBackend:
     nsim = int(np.prod(lead, dtype=int))
     with self._lock:
       batch = self._batch(nsim)
-      batch.state[:] = np.ascontiguousarray(raw).reshape(nsim, -1).view(np.float64)
-      batch.ctrl[:] = np.asarray(ctrl, np.float64).reshape(nsim, -1)
-      batch.step(nstep=self.n_substeps)
-      return self._read(batch, lead)
+      state = np.ascontiguousarray(raw).reshape(nsim, -1).view(np.float64)
+      batch.state[:] = state
+      control = np.repeat(np.asarray(ctrl, np.float64).reshape(nsim, 1, -1), self.n_substeps, axis=1)
+      times = batch.rollout(self.n_substeps, control=control, control_spec=_CTRL,
+                            record=(_TIME,))[_TIME][..., 0]
+      dt = self.mj_model.opt.timestep
+      expected = state[:, :1] + dt * np.arange(1, self.n_substeps + 1)
+      diverged = np.any(np.abs(times - expected) > 0.5 * dt, axis=1)
+      out = self._read(batch, lead)
+      out[1].reshape(nsim, -1)[diverged] = np.nan  # qpos
+      return out
 
   # -- traced side -----------------------------------------------------------
   def _call(self, fn, *args) -> NativeState:

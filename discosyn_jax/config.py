@@ -1,0 +1,136 @@
+"""The typed configuration of a training run, and its checks.
+
+One frozen dataclass holds everything a run depends on; presets (experiments/presets.py)
+are instances of it, command-line flags replace fields. The same config rebuilds the
+network and the environments when a run is resumed or evaluated.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from typing import Any
+
+DECODERS = ("linear", "mlp", "identity")
+
+# Fields that may differ between a run and its resumption: they change how long and how
+# often, never what the state holds.
+RESUMABLE = frozenset({"steps", "eval_every", "eval_envs", "checkpoint_every", "keep_checkpoints"})
+
+
+@dataclasses.dataclass(frozen=True)
+class TrainConfig:
+  # what is learned
+  tasks: tuple[str, ...] = ("valve0", "valve1", "valve2", "valve3")
+  n_synergies: int = 3  # b, the dimension of z; the action size for the identity decoder
+  decoder: str = "linear"  # linear (a b x 20 matrix) | mlp | identity (full-action PPO)
+  decoder_bias: bool = True  # linear decoder: a = W z + c rather than W z
+  freeze_decoder: bool = False  # decoder parameters outside the optimiser
+  # the extended reward, paper Eq. 2: alpha1 H(pi(z|s,n)) + alpha2 log q(z|a) + alpha3 H(p(a|z))
+  alpha1: float = 1e-3
+  alpha2: float = 1e-2
+  alpha3: float = 1e-3
+  # networks
+  policy_hidden: tuple[int, ...] = (128, 128)
+  value_hidden: tuple[int, ...] = (128, 128)
+  decoder_hidden: tuple[int, ...] = (128, 128)  # mlp decoder only
+  discriminator_hidden: tuple[int, ...] = (128, 128)
+  init_z_std: float = 1.0  # initial std of pi(z|s,n)
+  init_action_std: float = 0.3  # initial std of p(a|z)
+  # PPO
+  num_envs: int = 64  # per task
+  unroll_length: int = 20  # control steps per env per train step
+  num_minibatches: int = 4
+  update_epochs: int = 4
+  learning_rate: float = 3e-4
+  discriminator_learning_rate: float = 3e-4
+  discount: float = 0.97
+  gae_lambda: float = 0.95
+  clip_epsilon: float = 0.2
+  value_coef: float = 0.5
+  max_grad_norm: float = 1.0
+  reward_scaling: float = 1.0
+  normalize_observations: bool = True
+  # the run
+  steps: int = 100  # train steps; each one is len(tasks) * num_envs * unroll_length env steps
+  seed: int = 0
+  backend: str = "auto"  # physics: auto | native | mjx
+  eval_every: int = 20  # train steps between deterministic evaluations (0: only at the end)
+  eval_envs: int = 32  # episodes per task in an evaluation
+  checkpoint_every: int = 50  # train steps between checkpoints (0: only the final one)
+  keep_checkpoints: int = 3  # periodic checkpoints kept besides `final`
+
+  @property
+  def env_steps_per_train_step(self) -> int:
+    return len(self.tasks) * self.num_envs * self.unroll_length
+
+  def validate(self) -> "TrainConfig":
+    """Raise ValueError naming the first impossible setting; return self."""
+    if not self.tasks:
+      raise ValueError("no tasks given")
+    if len(set(self.tasks)) != len(self.tasks):
+      raise ValueError(f"a task is listed twice: {', '.join(self.tasks)}")
+    if self.decoder not in DECODERS:
+      raise ValueError(f"unknown decoder {self.decoder!r}; known: {', '.join(DECODERS)}")
+    if self.decoder == "identity":
+      if self.alpha2 or self.alpha3:
+        raise ValueError("the identity decoder (full-action PPO) has no discriminator or decoder "
+                         "noise: set alpha2 = alpha3 = 0")
+    elif not 1 <= self.n_synergies <= 20:
+      raise ValueError(f"the synergy count must be between 1 and 20, not {self.n_synergies}")
+    positive = ("num_envs", "unroll_length", "num_minibatches", "update_epochs", "steps",
+                "eval_envs", "keep_checkpoints")
+    for name in positive:
+      if getattr(self, name) < 1:
+        raise ValueError(f"{name} must be at least 1, not {getattr(self, name)}")
+    for name in ("eval_every", "checkpoint_every", "alpha1", "alpha2", "alpha3"):
+      if getattr(self, name) < 0:
+        raise ValueError(f"{name} must not be negative, not {getattr(self, name)}")
+    samples = self.num_envs * self.unroll_length
+    if samples % self.num_minibatches:
+      raise ValueError(f"num_envs x unroll_length = {samples} does not split into "
+                       f"{self.num_minibatches} minibatches")
+    if not 0 < self.discount <= 1 or not 0 <= self.gae_lambda <= 1:
+      raise ValueError("discount must be in (0, 1] and gae_lambda in [0, 1]")
+    for name in ("init_z_std", "init_action_std", "learning_rate", "discriminator_learning_rate"):
+      if getattr(self, name) <= 0:
+        raise ValueError(f"{name} must be positive, not {getattr(self, name)}")
+    return self
+
+  def to_dict(self) -> dict[str, Any]:
+    return dataclasses.asdict(self)
+
+  @classmethod
+  def from_dict(cls, values: dict[str, Any]) -> "TrainConfig":
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    unknown = sorted(set(values) - set(fields))
+    if unknown:
+      raise ValueError(f"unknown config field(s): {', '.join(unknown)}")
+    # JSON has no tuples
+    return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in values.items()})
+
+  def replace(self, **changes) -> "TrainConfig":
+    return dataclasses.replace(self, **changes)
+
+
+def save(config: TrainConfig, path) -> None:
+  with open(path, "w") as f:
+    json.dump(config.to_dict(), f, indent=1)
+
+
+def load(path) -> TrainConfig:
+  try:
+    with open(path) as f:
+      values = json.load(f)
+  except json.JSONDecodeError as err:
+    raise ValueError(f"malformed config file {path}: {err}") from None
+  if not isinstance(values, dict):
+    raise ValueError(f"malformed config file {path}: not a JSON object")
+  return TrainConfig.from_dict(values)
+
+
+def mismatches(saved: TrainConfig, requested: TrainConfig) -> list[str]:
+  """Fields in which `requested` cannot continue the run that `saved` describes."""
+  return [f"{name} is {getattr(saved, name)!r} in the run but {getattr(requested, name)!r} here"
+          for name in saved.to_dict()
+          if name not in RESUMABLE and getattr(saved, name) != getattr(requested, name)]

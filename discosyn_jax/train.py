@@ -1,0 +1,246 @@
+"""The training step: one pure, jit-compiled function `train_step(state) -> (state, metrics)`.
+
+  for each task (a Python loop unrolled at trace time: tasks have different models)
+    lax.scan over unroll_length control steps, num_envs envs in parallel:
+      obs -> normalise -> head_n -> z -> decoder -> a -> env_n.step
+  extended reward r + alpha2 log q(z|a); GAE per task (brax's compute_gae, with truncation)
+  PPO epochs over minibatches, every task's samples in every minibatch; the discriminator is
+  fitted in the same optimiser steps on its own parameters (see ppo.py)
+
+The bonus log q(z|a) is computed with the discriminator as it was when the batch was
+collected, then the discriminator is fitted to that batch during the same update: the
+paper's Algorithm 1 fits q first, which differs by one update of q.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import jax
+import jax.numpy as jnp
+import optax
+from brax.envs.base import Env
+from brax.training.acme import running_statistics
+from brax.training.agents.ppo.losses import compute_gae
+from flax import struct
+
+from discosyn_jax import networks, ppo, wrappers
+from discosyn_jax.config import TrainConfig
+from discosyn_jax.networks import DiscoSyn, gaussian_log_prob
+
+
+@struct.dataclass
+class TrainState:
+  params: Any
+  opt_state: Any
+  normalizers: tuple  # running_statistics state per task
+  env_states: tuple  # batched brax State per task
+  rng: jax.Array  # uint32[2]
+  step: jax.Array  # int32: train steps done
+
+
+def make_envs(config: TrainConfig) -> list[Env]:
+  import tasks
+
+  return [tasks.make(name, backend=config.backend) for name in config.tasks]
+
+
+class Trainer:
+  """Builds the module, the optimiser and the jitted functions for one config.
+
+  `envs` defaults to the registered tasks; any Brax-style env with `episode_length`, a
+  `success` metric and actions in [-1, 1] works (the tests use a tiny one).
+  """
+
+  def __init__(self, config: TrainConfig, envs: Sequence[Env] | None = None):
+    self.config = config.validate()
+    self.envs = list(envs) if envs is not None else make_envs(config)
+    if len(self.envs) != len(config.tasks):
+      raise ValueError(f"{len(self.envs)} envs given for {len(config.tasks)} tasks")
+    sizes = {env.action_size for env in self.envs}
+    if len(sizes) != 1:
+      raise ValueError(f"the tasks' action sizes differ: {sorted(sizes)}")
+    self.action_size = sizes.pop()
+    self.obs_sizes = tuple(env.observation_size for env in self.envs)
+    self.model = networks.build(config, self.obs_sizes, self.action_size)
+    self.optimizer = ppo.optimizer(config)
+    self._train = [wrappers.for_training(env) for env in self.envs]
+    self._eval = [wrappers.for_evaluation(env) for env in self.envs]
+    self.train_step = jax.jit(self._train_step, donate_argnums=0)
+    self.evaluate = jax.jit(self._evaluate)
+
+  # -- state -----------------------------------------------------------------
+  def init(self, seed: int | None = None, decoder_params=None) -> TrainState:
+    """A fresh state; `decoder_params` replaces the initial decoder (e.g. a frozen one)."""
+    key = jax.random.PRNGKey(self.config.seed if seed is None else seed)
+    key, init_key, *env_keys = jax.random.split(key, 2 + len(self.envs))
+    params = self.model.init(init_key, [jnp.zeros((1, s)) for s in self.obs_sizes])
+    if decoder_params is not None:
+      params = _with_decoder(params, decoder_params)
+    envs = tuple(env.reset(jax.random.split(k, self.config.num_envs))
+                 for env, k in zip(self._train, env_keys))
+    norms = tuple(running_statistics.init_state(jnp.zeros((s,))) for s in self.obs_sizes)
+    state = TrainState(params=params, opt_state=self.optimizer.init(params), normalizers=norms,
+                       env_states=envs, rng=key, step=jnp.zeros((), jnp.int32))
+    # every leaf an array, as train_step returns them: one compiled signature, one checkpoint layout
+    return jax.tree.map(jnp.asarray, state)
+
+  # -- acting ----------------------------------------------------------------
+  def _normalize(self, obs, norm):
+    if not self.config.normalize_observations:
+      return obs
+    return running_statistics.normalize(obs, norm, max_abs_value=10.0)
+
+  def act(self, params, task: int, obs, key=None):
+    """(z, a, log pi(z, a | s)) for normalised `obs`; the means when `key` is None."""
+    z_mean, z_log_std = self.model.apply(params, task, obs, method=DiscoSyn.policy)
+    if key is None:
+      return z_mean, self.model.apply(params, z_mean, method=DiscoSyn.decode)[0], None
+    z_key, a_key = jax.random.split(key)
+    z = z_mean + jnp.exp(z_log_std) * jax.random.normal(z_key, z_mean.shape)
+    log_prob = gaussian_log_prob(z, z_mean, z_log_std)
+    a_mean, a_log_std = self.model.apply(params, z, method=DiscoSyn.decode)
+    if a_log_std is None:
+      return z, a_mean, log_prob
+    a = a_mean + jnp.exp(a_log_std) * jax.random.normal(a_key, a_mean.shape)
+    return z, a, log_prob + gaussian_log_prob(a, a_mean, a_log_std)
+
+  def _unroll(self, params, norm, env_state, key, task: int):
+    env = self._train[task]
+
+    def step(env_state, key):
+      obs = env_state.obs
+      z, a, log_prob = self.act(params, task, self._normalize(obs, norm), key)
+      env_state = env.step(env_state, a)
+      info = env_state.info
+      out = dict(obs=obs, z=z, action=a, log_prob=log_prob, reward=env_state.reward,
+                 done=env_state.done, truncation=info["truncation"],
+                 episode_return=info["episode_metrics"]["sum_reward"],
+                 metrics=env_state.metrics)
+      return env_state, out
+
+    keys = jax.random.split(key, self.config.unroll_length)
+    return jax.lax.scan(step, env_state, keys)
+
+  # -- the training step -----------------------------------------------------
+  def _train_step(self, state: TrainState):
+    cfg = self.config
+    rng, update_key, *task_keys = jax.random.split(state.rng, 2 + len(self.envs))
+    params = state.params
+    env_states, norms, samples, metrics = [], [], [], {}
+    for n, name in enumerate(cfg.tasks):
+      env_state, traj = self._unroll(params, state.normalizers[n], state.env_states[n],
+                                     task_keys[n], n)
+      norm = state.normalizers[n]
+      if cfg.normalize_observations:
+        norm = running_statistics.update(norm, traj["obs"].reshape(-1, traj["obs"].shape[-1]))
+      obs = self._normalize(traj["obs"], norm)
+      reward = traj["reward"] * cfg.reward_scaling
+      log_q = jnp.zeros_like(reward)
+      if self.model.has_discriminator:
+        log_q = ppo.discriminator_log_prob(self.model, params, traj["z"], traj["action"])
+        reward = reward + cfg.alpha2 * log_q
+      value = self.model.apply(params, n, obs, method=DiscoSyn.value)
+      bootstrap = self.model.apply(params, n, self._normalize(env_state.obs, norm),
+                                   method=DiscoSyn.value)
+      termination = traj["done"] * (1 - traj["truncation"])
+      target, advantage = compute_gae(
+          truncation=traj["truncation"], termination=termination, rewards=reward,
+          values=value, bootstrap_value=bootstrap, lambda_=cfg.gae_lambda, discount=cfg.discount)
+      flat = lambda x: x.reshape((-1,) + x.shape[2:])
+      samples.append(ppo.Samples(obs=flat(obs), z=flat(traj["z"]), action=flat(traj["action"]),
+                                 log_prob=flat(traj["log_prob"]), advantage=flat(advantage),
+                                 target=flat(target)))
+      env_states.append(env_state)
+      norms.append(norm)
+      metrics.update({f"{name}/{k}": v for k, v in _episode_metrics(traj, log_q).items()})
+
+    params, opt_state, loss_metrics = self._update(params, state.opt_state, samples, update_key)
+    for n, name in enumerate(cfg.tasks):
+      metrics.update({f"{name}/{k}": v for k, v in loss_metrics["tasks"][n].items()})
+    metrics.update(loss_metrics["shared"])
+    finite = jnp.isfinite(loss_metrics["shared"]["loss"])
+    for leaf in jax.tree.leaves(params):
+      finite &= jnp.isfinite(leaf).all()
+    metrics["finite"] = finite
+    new = TrainState(params=params, opt_state=opt_state, normalizers=tuple(norms),
+                     env_states=tuple(env_states), rng=rng, step=state.step + 1)
+    return new, metrics
+
+  def _update(self, params, opt_state, samples: list[ppo.Samples], key):
+    """`update_epochs` passes of `num_minibatches` optimiser steps over every task's samples."""
+    cfg = self.config
+    grad_fn = jax.grad(ppo.loss, has_aux=True)
+
+    def minibatch_step(carry, batch):
+      params, opt_state = carry
+      grads, (per_task, shared) = grad_fn(params, self.model, batch, cfg)
+      updates, opt_state = self.optimizer.update(grads, opt_state, params)
+      shared = dict(shared, grad_norm=optax.global_norm(grads))
+      return (optax.apply_updates(params, updates), opt_state), {"tasks": per_task, "shared": shared}
+
+    def epoch(carry, key):
+      keys = jax.random.split(key, len(samples))
+
+      def shuffle(s, k):
+        perm = jax.random.permutation(k, s.obs.shape[0])
+        return jax.tree.map(
+            lambda x: x[perm].reshape((cfg.num_minibatches, -1) + x.shape[1:]), s)
+
+      batches = [shuffle(s, k) for s, k in zip(samples, keys)]
+      return jax.lax.scan(minibatch_step, carry, batches)
+
+    (params, opt_state), metrics = jax.lax.scan(
+        epoch, (params, opt_state), jax.random.split(key, cfg.update_epochs))
+    return params, opt_state, jax.tree.map(jnp.mean, metrics)
+
+  # -- evaluation -----------------------------------------------------------
+  def _evaluate(self, params, normalizers, key):
+    """One deterministic episode (head mean, decoder mean) per env and task:
+    {task: {"return", "success"}} averaged over `eval_envs` episodes."""
+    out = {}
+    for n, (name, env) in enumerate(zip(self.config.tasks, self._eval)):
+      key, sub = jax.random.split(key)
+      state = env.reset(jax.random.split(sub, self.config.eval_envs))
+      zeros = jnp.zeros(self.config.eval_envs)
+
+      def step(carry, _):
+        state, alive, ret, success = carry
+        _, a, _ = self.act(params, n, self._normalize(state.obs, normalizers[n]))
+        state = env.step(state, a)
+        ret = ret + alive * state.reward
+        ended = alive * state.done
+        success = jnp.where(ended > 0, state.metrics["success"], success)
+        return (state, alive * (1 - state.done), ret, success), None
+
+      (_, _, ret, success), _ = jax.lax.scan(
+          step, (state, jnp.ones_like(zeros), zeros, zeros), None,
+          length=self.envs[n].episode_length)
+      out[name] = {"return": ret.mean(), "success": success.mean()}
+    return out
+
+
+def _episode_metrics(traj, log_q) -> dict[str, jax.Array]:
+  """Per-task figures of one rollout: episodes that ended in it, and per-step means."""
+  done = traj["done"]
+  episodes = done.sum()
+  per_episode = lambda x: (x * done).sum() / jnp.maximum(episodes, 1)
+  m = traj["metrics"]
+  out = {"episodes": episodes, "return": per_episode(traj["episode_return"]),
+         "success": per_episode(m["success"]), "diverged": m["diverged"].sum(),
+         "reward": traj["reward"].mean(), "log_q": log_q.mean()}
+  out.update({k: v.mean() for k, v in m.items() if k.startswith("reward/")})
+  return out
+
+
+def _with_decoder(params, decoder_params):
+  inner = dict(params["params"])
+  if "synergy_decoder" not in inner:
+    raise ValueError("this model has no synergy decoder to replace (identity decoder)")
+  want = jax.tree.map(jnp.shape, inner["synergy_decoder"])
+  got = jax.tree.map(jnp.shape, decoder_params)
+  if want != got:
+    raise ValueError(f"the given decoder does not fit this model: {got} != {want}")
+  inner["synergy_decoder"] = decoder_params
+  return {**params, "params": inner}
+

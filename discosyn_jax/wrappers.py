@@ -1,0 +1,64 @@
+"""Batched training envs: Brax's episode and vmap wrappers, and an auto-reset that draws a
+fresh initial state for every episode.
+
+Brax's own `AutoResetWrapper` puts a finished env back into the state of its first reset,
+forever, so a task's random goals and initial hand noise would never change during
+training. `FreshResetWrapper` keeps a key per env and resets finished envs from it.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+from brax.envs.base import Env, State, Wrapper
+from brax.envs.wrappers.training import EpisodeWrapper, VmapWrapper
+
+# info entries of the finished episode that must survive the reset: GAE needs the
+# truncation flag, the logs need the episode's sums
+_KEEP_ON_RESET = ("truncation", "episode_done", "episode_metrics")
+
+
+class FreshResetWrapper(Wrapper):
+  """Batched auto-reset: an env whose step ends its episode comes back freshly reset.
+
+  The returned state keeps the finished step's reward, done and metrics (they describe
+  the transition) but holds the new episode's physics state and observation.
+  """
+
+  def reset(self, rng: jax.Array) -> State:
+    keys = jax.vmap(jax.random.split)(rng)  # (B, 2, 2): one to reset now, one to keep
+    state = self.env.reset(keys[:, 0])
+    state.info["reset_key"] = keys[:, 1]
+    return state
+
+  def step(self, state: State, action: jax.Array) -> State:
+    # a reset env already holds its fresh info (steps = 0); `done` described the last step
+    state = self.env.step(state.replace(done=jnp.zeros_like(state.done)), action)
+    return jax.lax.cond(state.done.any(), self._reset_done, lambda s: s, state)
+
+  def _reset_done(self, state: State) -> State:
+    keys = jax.vmap(jax.random.split)(state.info["reset_key"])
+    fresh = self.env.reset(keys[:, 0])
+    done = state.done > 0
+
+    def where_done(new, old):
+      mask = jnp.reshape(done, done.shape + (1,) * (old.ndim - done.ndim))
+      return jnp.where(mask, new, old)
+
+    info = {k: (v if k in _KEEP_ON_RESET else jax.tree.map(where_done, fresh.info[k], v))
+            for k, v in state.info.items() if k != "reset_key"}
+    info["reset_key"] = where_done(keys[:, 1], state.info["reset_key"])
+    return state.replace(
+        pipeline_state=jax.tree.map(where_done, fresh.pipeline_state, state.pipeline_state),
+        obs=where_done(fresh.obs, state.obs), info=info)
+
+
+def for_training(env: Env) -> Env:
+  """Batched (reset takes keys of shape (B, 2)), time-limited at `env.episode_length`,
+  auto-resetting with fresh initial states."""
+  return FreshResetWrapper(VmapWrapper(EpisodeWrapper(env, env.episode_length, action_repeat=1)))
+
+
+def for_evaluation(env: Env) -> Env:
+  """Batched and time-limited, no reset: one episode per env."""
+  return VmapWrapper(EpisodeWrapper(env, env.episode_length, action_repeat=1))

@@ -1,0 +1,1 @@
+"""Experiment presets and scripts (benchmarks, calibration)."""

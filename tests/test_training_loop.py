@@ -1,0 +1,151 @@
+"""Around the train step: auto-reset, divergence, checkpoints and exact resume, the CLI."""
+
+import json
+import shutil
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import tasks
+from discosyn_jax import checkpoints, cli, loop, wrappers
+from discosyn_jax.config import TrainConfig
+from discosyn_jax.train import Trainer
+from tests.toy_env import ReachAction
+
+TINY = dict(n_synergies=2, policy_hidden=(16, 16), value_hidden=(16, 16),
+            discriminator_hidden=(16, 16), num_envs=4, unroll_length=5, num_minibatches=2,
+            update_epochs=1, eval_every=0, eval_envs=2, backend="native")
+VALVE = TrainConfig(tasks=("valve1",), steps=4, checkpoint_every=2, **TINY)
+
+
+@pytest.fixture(scope="module")
+def valve_run(tmp_path_factory):
+  """A 4-step run on valve1, checkpointed at steps 2 and 4."""
+  run_dir = tmp_path_factory.mktemp("runs") / "straight"
+  result = loop.train(VALVE, run_dir, progress=False, log=lambda *_: None)
+  return run_dir, result
+
+
+def test_fresh_reset_draws_a_new_initial_state_per_episode():
+  env = wrappers.for_training(ReachAction(0.0, episode_length=3))
+  state = env.reset(jax.random.split(jax.random.PRNGKey(0), 4))
+  first = state.obs
+  step = jax.jit(env.step)
+  zeros = jnp.zeros((4, 20))
+  starts = [first]
+  for t in range(1, 7):
+    state = step(state, zeros)
+    if t % 3 == 0:
+      np.testing.assert_array_equal(state.done, 1.0)
+      np.testing.assert_array_equal(state.info["truncation"], 1.0)
+      np.testing.assert_array_equal(state.info["steps"], 0.0)
+      starts.append(state.obs)
+    else:
+      np.testing.assert_array_equal(state.done, 0.0)
+      np.testing.assert_array_equal(state.info["steps"], t % 3)
+  # three episodes, three different initial observations in every env
+  assert not np.allclose(starts[0], starts[1]) and not np.allclose(starts[1], starts[2])
+
+
+def test_a_diverged_simulation_is_flagged_reset_and_counted():
+  env = tasks.make("valve1", backend="native")
+  trainer = Trainer(TrainConfig(tasks=("valve1",), **TINY), envs=[env])
+  state = trainer.init()
+  pipeline = jax.device_get(state.env_states[0].pipeline_state)
+  # velocities MuJoCo refuses (> 1e10) in two envs' float64 states: at its next step the C
+  # engine resets those simulations with a warning instead of producing NaN
+  raw = np.array(pipeline.raw).view(np.float64)
+  nq = env.mj_model.nq
+  raw[:2, 1 + nq:1 + nq + env.mj_model.nv] = 1e11  # state layout: time, qpos, qvel, ...
+  blown = pipeline.replace(raw=jnp.asarray(raw.view(np.uint32)))
+  state = state.replace(env_states=(state.env_states[0].replace(pipeline_state=blown),))
+  state, metrics = trainer.train_step(state)
+  assert float(metrics["valve1/diverged"]) == 2.0
+  assert bool(metrics["finite"])
+  assert np.isfinite(np.asarray(state.env_states[0].obs)).all()
+
+  # the env alone: the step is flagged, ends the episode and pays nothing
+  single = env.reset(jax.random.PRNGKey(0))
+  single = env.step(single.replace(pipeline_state=jax.tree.map(
+      lambda x: jnp.asarray(x[0]), pipeline.replace(raw=raw.view(np.uint32)))), jnp.zeros(20))
+  assert float(single.metrics["diverged"]) == 1.0 and float(single.done) == 1.0
+  assert float(single.reward) == 0.0
+
+
+def test_resume_gives_the_same_state_as_an_unbroken_run(valve_run, tmp_path):
+  straight_dir, straight = valve_run
+  assert (straight_dir / "final").is_dir() and (straight_dir / "checkpoints" / "2").is_dir()
+  broken = tmp_path / "broken"
+  loop.train(VALVE.replace(steps=2), broken, progress=False, log=lambda *_: None)
+  resumed = loop.train(VALVE, broken, resume=True, progress=False, log=lambda *_: None)
+  a, b = jax.device_get(straight["state"]), jax.device_get(resumed["state"])
+  assert int(b.step) == 4
+  # bit for bit: parameters, optimiser moments, normalisers, env physics, rng
+  jax.tree.map(np.testing.assert_array_equal, a, b)
+  assert straight["results"] == resumed["results"]
+  lines = (broken / "metrics.jsonl").read_text().splitlines()
+  assert [json.loads(l)["step"] for l in lines] == [1, 2, 3, 4]
+
+
+def test_checkpoint_restores_the_whole_state(valve_run):
+  run_dir, straight = valve_run
+  trainer = Trainer(VALVE)
+  restored = loop.restore(trainer, run_dir / "final")
+  jax.tree.map(np.testing.assert_array_equal, jax.device_get(straight["state"]),
+               jax.device_get(restored))
+  assert checkpoints.latest(run_dir) == run_dir / "final"
+
+
+def test_eval_prints_the_table_training_ended_with(valve_run, capsys):
+  run_dir, straight = valve_run
+  assert cli.main(["eval", str(run_dir)]) == 0
+  rows = [l.split() for l in capsys.readouterr().out.splitlines() if l.startswith("valve1 ")]
+  r = straight["results"]["valve1"]
+  assert rows == [["valve1", f"{r['success']:.1%}", f"{r['return']:.2f}"]]
+
+
+def test_non_finite_training_stops_and_keeps_the_last_good_checkpoint(tmp_path):
+  config = TrainConfig(tasks=("a",), steps=2, checkpoint_every=2, **{**TINY, "backend": "auto"})
+  run_dir = tmp_path / "run"
+  good = Trainer(config, envs=[ReachAction(0.3)])
+  loop.train(config, run_dir, trainer=good, progress=False, log=lambda *_: None)
+  bad = Trainer(config.replace(steps=4), envs=[ReachAction(np.full(20, np.nan))])
+  with pytest.raises(loop.TrainingDiverged, match="non-finite .* step 3.*final"):
+    loop.train(config.replace(steps=4), run_dir, resume=True, trainer=bad, progress=False,
+               log=lambda *_: None)
+  assert int(loop.restore(good, run_dir / "final").step) == 2
+  assert sorted(p.name for p in (run_dir / "checkpoints").iterdir()) == ["2"]
+
+
+def _fails_with_one_line(argv, capsys, match):
+  assert cli.main(argv) == 2
+  err = capsys.readouterr().err.strip().splitlines()
+  assert len(err) == 1 and err[0].startswith("discosyn: error:") and match in err[0], err
+
+
+def test_train_refuses_bad_input(tmp_path, capsys):
+  out = str(tmp_path / "run")
+  _fails_with_one_line(["train", "--tasks", "valve9", "--out", out], capsys, "unknown task")
+  _fails_with_one_line(["train", "--synergies", "0", "--out", out], capsys, "between 1 and 20")
+  _fails_with_one_line(["train", "--synergies", "21", "--out", out], capsys, "between 1 and 20")
+  _fails_with_one_line(["train", "--preset", "nope", "--out", out], capsys, "unknown preset")
+  _fails_with_one_line(["train", "--resume", "--out", out], capsys, "holds no run")
+  assert not (tmp_path / "run").exists()
+
+
+def test_a_run_is_never_silently_overwritten_or_misread(valve_run, tmp_path, capsys):
+  run_dir, _ = valve_run
+  before = sorted(p.name for p in run_dir.rglob("*"))
+  _fails_with_one_line(["train", "--out", str(run_dir)], capsys, "already holds a run")
+  _fails_with_one_line(["train", "--out", str(run_dir), "--resume", "--synergies", "3",
+                        "--tasks", "valve1"], capsys, "n_synergies")
+  assert sorted(p.name for p in run_dir.rglob("*")) == before
+
+  other = tmp_path / "other"  # valve_run's checkpoint under a config it does not fit
+  shutil.copytree(run_dir / "final", other / "final")
+  (other / "config.json").write_text(json.dumps(VALVE.replace(policy_hidden=(8, 8)).to_dict()))
+  _fails_with_one_line(["eval", str(other)], capsys, "does not match this config")
+  (other / "config.json").write_text("{not json")
+  _fails_with_one_line(["eval", str(other)], capsys, "malformed config file")

@@ -1,0 +1,49 @@
+"""A tiny pure-JAX task the trainer must solve in seconds: hold the action at a target.
+
+Observation: a noisy constant (the policy has to learn to ignore the noise). Reward per
+step: 1 - mean squared distance of the clipped action from the target. Success: the
+final action within 0.1 (RMS) of the target. No physics, so training tests stay fast.
+"""
+
+import jax
+import jax.numpy as jnp
+from brax.envs.base import Env, State
+
+
+class ReachAction(Env):
+
+  def __init__(self, target, obs_size: int = 3, episode_length: int = 10, action_size: int = 20):
+    self.target = jnp.broadcast_to(jnp.asarray(target, jnp.float32), (action_size,))
+    self._obs_size = obs_size
+    self._action_size = action_size
+    self.episode_length = episode_length
+
+  @property
+  def observation_size(self):
+    return self._obs_size
+
+  @property
+  def action_size(self):
+    return self._action_size
+
+  @property
+  def backend(self):
+    return "jax"
+
+  def _obs(self, key):
+    return 1.0 + 0.1 * jax.random.normal(key, (self._obs_size,))
+
+  def reset(self, rng):
+    key, sub = jax.random.split(rng)
+    zero = jnp.zeros(())
+    metrics = {"success": zero, "diverged": zero, "reward/reach": zero}
+    return State(pipeline_state=key, obs=self._obs(sub), reward=zero, done=zero,
+                 metrics=metrics, info={})
+
+  def step(self, state, action):
+    key, sub = jax.random.split(state.pipeline_state)
+    error = jnp.mean((jnp.clip(action, -1, 1) - self.target) ** 2)
+    reward = 1.0 - error
+    metrics = {"success": (error < 0.01).astype(jnp.float32), "diverged": jnp.zeros(()),
+               "reward/reach": reward}
+    return state.replace(pipeline_state=key, obs=self._obs(sub), reward=reward, metrics=metrics)
