@@ -109,24 +109,27 @@ _TRAIN_FLAGS = {
 }
 
 
-def train_config(args):
-  """The preset with the flags given on the command line applied."""
-  from discosyn_jax.config import TrainConfig
+def train_config(args, base=None):
+  """The preset (or, when resuming, the run's own config) with the flags given applied."""
   from experiments import presets
 
-  config: TrainConfig = presets.preset(args.preset)
+  if base is None or args.preset is not None:
+    base = presets.preset(args.preset or "quickstart")
   changes = {field: getattr(args, flag) for flag, field in _TRAIN_FLAGS.items()
              if getattr(args, flag) is not None}
   if args.tasks:
     changes["tasks"] = tuple(_task_names(args.tasks))
-  return config.replace(**changes).validate()
+  return base.replace(**changes).validate()
 
 
 def cmd_train(args) -> None:
+  from discosyn_jax import config as config_lib
   from discosyn_jax import loop
 
-  config = train_config(args)
-  out = pathlib.Path(args.out or f"runs/{args.preset}-seed{config.seed}")
+  out = pathlib.Path(args.out or f"runs/{args.preset or 'quickstart'}-seed{args.seed or 0}")
+  saved = out / loop.CONFIG_FILE
+  base = config_lib.load(saved) if args.resume and saved.is_file() else None
+  config = train_config(args, base)
   print(f"run directory: {out}")
   loop.train(config, out, resume=args.resume, force=args.force, progress=not args.no_progress)
 
@@ -155,7 +158,8 @@ def build_parser() -> argparse.ArgumentParser:
   sub = parser.add_subparsers(dest="command", required=True)
 
   p = sub.add_parser("train", help="train synergies and policies (a preset, flags replace fields)")
-  p.add_argument("--preset", default="quickstart", help="a preset of experiments/presets.py")
+  p.add_argument("--preset", help="a preset of experiments/presets.py (default: quickstart; "
+                 "with --resume: the run's own config)")
   p.add_argument("--tasks", nargs="+", help="tasks or task sets (default: the preset's)")
   p.add_argument("--synergies", type=int, help="synergy count b (1-20)")
   p.add_argument("--decoder", help="linear | mlp | identity (full-action PPO)")

@@ -149,3 +149,13 @@ def test_a_run_is_never_silently_overwritten_or_misread(valve_run, tmp_path, cap
   _fails_with_one_line(["eval", str(other)], capsys, "does not match this config")
   (other / "config.json").write_text("{not json")
   _fails_with_one_line(["eval", str(other)], capsys, "malformed config file")
+
+
+def test_cli_resume_continues_with_the_runs_own_config(valve_run, tmp_path, capsys):
+  run_dir, _ = valve_run
+  copy = tmp_path / "copy"  # VALVE is no preset: resuming must not fall back to one
+  shutil.copytree(run_dir, copy)
+  assert cli.main(["train", "--out", str(copy), "--resume", "--steps", "5", "--no-progress"]) == 0
+  out = capsys.readouterr().out
+  assert "evaluation at step 5" in out and "valve1 " in out
+  assert len((copy / "metrics.jsonl").read_text().splitlines()) == 5
