@@ -30,11 +30,11 @@ def _task_names(names: list[str]) -> list[str]:
 def cmd_tasks(args) -> None:
   import tasks
 
-  print(f"{'task':14s} {'obs':>4s} {'act':>4s}  {'sets':10s} description")
+  print(f"{'task':16s} {'obs':>4s} {'act':>4s}  {'sets':10s} description")
   for name, entry in tasks.REGISTRY.items():
     env = tasks.make(name, backend="native")
     sets = ",".join(tasks.sets_of(name)) or "-"
-    print(f"{name:14s} {env.observation_size:4d} {env.action_size:4d}  {sets:10s} {entry.summary}")
+    print(f"{name:16s} {env.observation_size:4d} {env.action_size:4d}  {sets:10s} {entry.summary}")
 
 
 def cmd_demo(args) -> None:
