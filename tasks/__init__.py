@@ -37,7 +37,8 @@ REGISTRY: dict[str, Entry] = {
     # unseen tasks (learned with a frozen synergy decoder)
     "valve_cylinder": Entry(valve.Valve, lambda **kw: valve.default_config(shape="wheel", **kw),
                             "turn a round wheel valve counter-clockwise"),
-    "valve_cw": Entry(valve.Valve, lambda **kw: valve.default_config(arms=3, direction=-1.0, **kw),
+    "valve_cw": Entry(valve.Valve, lambda **kw: valve.default_config(
+                          arms=3, direction=-1.0, success_turn=1.2, **kw),
                       "turn the three-armed valve clockwise"),
     "screw_topdown": Entry(screw.Screw, lambda **kw: screw.default_config(topdown=True, **kw),
                            "drive an upright screwdriver in, clockwise from above"),

@@ -11,6 +11,8 @@ Numbers, and why (measured with experiments/valve_calibration.py, see docs/TASKS
 the hinge gets the frictionloss and damping of a hand-operated valve so that random
 flailing cannot spin it, and the rewarded speed is capped so that striking it is worth no
 more than turning it steadily. The wheel keeps the valves' hinge, threshold and reward.
+valve_cw needs a net clockwise turn of 1.2 rad (not pi/4): random flailing drifts valve3
+clockwise by 0.25 rad on average, and met pi/4 clockwise in 22 % of episodes.
 """
 
 from __future__ import annotations
