@@ -88,12 +88,13 @@ def cmd_render_scenes(args) -> None:
   out.mkdir(parents=True, exist_ok=True)
   for name in _task_names(args.tasks):
     env = tasks.make(name, backend="native")
-    # a frame from the middle of the scripted stroke: fingers dipped towards the object
-    actions = jnp.asarray(scripted.grasp_and_sweep(args.step, env.dt))
+    # a frame from the task's scripted motion (valves: the middle of a stroke, fingers dipped)
+    actions = jnp.asarray(scripted.for_task(name, args.step, env.dt))
     state = env.reset(jax.random.PRNGKey(args.seed))
     for action in actions:
       state = env.step(state, action)
     data = env.physics.to_mjdata(jax.device_get(state.pipeline_state))
+    env.task.show(env.mj_model, data, jax.device_get(state.info))
     path = out / f"{name}.png"
     Image.fromarray(render.frames(env.mj_model, data)).save(path)
     print(path)

@@ -94,6 +94,11 @@ class Dice(Task):
     goal = jnp.concatenate([jnp.cos(angle / 2)[None], jnp.sin(angle / 2) * axis])
     return self.hand.start_qpos(k_hand, self.config.hand_noise), self.hand.zero_qvel(), {"goal": goal}
 
+  def show(self, model: mujoco.MjModel, data: mujoco.MjData, info: Info) -> None:
+    """Turn the translucent goal cube beside the hand to the goal orientation."""
+    data.mocap_quat[model.body("dice_goal").mocapid[0]] = info["goal"]
+    mujoco.mj_kinematics(model, data)
+
   def pos(self, view: PhysicsView) -> jax.Array:
     return view.qpos[self.dice_qpos:self.dice_qpos + 3]
 
