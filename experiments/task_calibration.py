@@ -21,6 +21,7 @@ import numpy as np
 import tasks
 from discosyn_jax import hand, scripted
 from discosyn_jax.physics.native import deepest_penetration
+from discosyn_jax.rollouts import run_episode
 
 DEFAULT_TASKS = ("dice", "weight_pull", "screw", "valve_cylinder", "valve_cw", "screw_topdown", "valve_goal")
 
@@ -50,24 +51,10 @@ def _view(qpos):
 
 
 def rollout(env, actions_fn, episodes: int, seed: int):
-  """Whole episodes without auto-reset; per-step qpos, qvel, raw states, success, done."""
-  n = env.episode_length
-
-  @jax.jit
-  def go(keys):
-    state = jax.vmap(env.reset)(keys)
-
-    def body(carry, t):
-      state, key = carry
-      key, sub = jax.random.split(key)
-      state = jax.vmap(env.step)(state, actions_fn(t, sub, keys.shape[0]))
-      return (state, key), (state.pipeline_state, state.metrics["success"], state.done)
-
-    _, out = jax.lax.scan(body, (state, jax.random.PRNGKey(seed + 1)), jnp.arange(n))
-    return state.info, out
-
-  info, (pstate, success, done) = go(jax.random.split(jax.random.PRNGKey(seed), episodes))
-  return jax.device_get(info), jax.device_get(pstate), np.asarray(success), np.asarray(done)
+  """Whole episodes without auto-reset; per-step pipeline states, success, done."""
+  start, states = run_episode(env, jax.random.split(jax.random.PRNGKey(seed), episodes), actions_fn, seed=seed + 1)
+  return (jax.device_get(start.info), jax.device_get(states.pipeline_state),
+          np.asarray(states.metrics["success"]), np.asarray(states.done))
 
 
 def report(label, env, info, pstate, success, done):
