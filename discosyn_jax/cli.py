@@ -30,11 +30,11 @@ def _task_names(names: list[str]) -> list[str]:
 def cmd_tasks(args) -> None:
   import tasks
 
-  print(f"{'task':14s} {'obs':>4s} {'act':>4s}  {'sets':10s} description")
+  print(f"{'task':16s} {'obs':>4s} {'act':>4s}  {'sets':10s} description")
   for name, entry in tasks.REGISTRY.items():
     env = tasks.make(name, backend="native")
     sets = ",".join(tasks.sets_of(name)) or "-"
-    print(f"{name:14s} {env.observation_size:4d} {env.action_size:4d}  {sets:10s} {entry.summary}")
+    print(f"{name:16s} {env.observation_size:4d} {env.action_size:4d}  {sets:10s} {entry.summary}")
 
 
 def cmd_demo(args) -> None:
@@ -88,12 +88,13 @@ def cmd_render_scenes(args) -> None:
   out.mkdir(parents=True, exist_ok=True)
   for name in _task_names(args.tasks):
     env = tasks.make(name, backend="native")
-    # a frame from the middle of the scripted stroke: fingers dipped towards the object
-    actions = jnp.asarray(scripted.grasp_and_sweep(args.step, env.dt))
+    # a frame from the task's scripted motion (valves: the middle of a stroke, fingers dipped)
+    actions = jnp.asarray(scripted.for_task(name, args.step, env.dt))
     state = env.reset(jax.random.PRNGKey(args.seed))
     for action in actions:
       state = env.step(state, action)
     data = env.physics.to_mjdata(jax.device_get(state.pipeline_state))
+    env.task.show(env.mj_model, data, jax.device_get(state.info))
     path = out / f"{name}.png"
     Image.fromarray(render.frames(env.mj_model, data)).save(path)
     print(path)

@@ -6,7 +6,24 @@ import mujoco
 
 from discosyn_jax import assets
 
+# Where the forearm (the hand's fixed root) is mounted: position and xyaxes in the world.
+# Palm down (hand.xml's own pose): the palm-frame point (0.011, 0, 0.11), the middle of the
+# knuckle line, lies at world (0, 0, 0.225) and the palm faces -z.
+PALM_DOWN = ((0.011, -0.4, 0.225), (-1, 0, 0, 0, 0, 1))
+# Palm up, for objects that rest on the palm: the same knuckle point, the palm facing +z
+# (palm x -> world +x, palm y -> world -z); the palm's surface is at world z 0.2361.
+PALM_UP = ((-0.011, -0.4, 0.225), (1, 0, 0, 0, 0, -1))
+
 
 def load_spec(scene: str) -> mujoco.MjSpec:
   """The editable spec of a scene, for tasks that set parameters before compiling."""
   return mujoco.MjSpec.from_file(str(assets.xml_path(f"scenes/{scene}.xml")))
+
+
+def mount_hand(spec: mujoco.MjSpec, mount: tuple) -> None:
+  """Move the hand's forearm to `mount` = (pos, xyaxes), e.g. PALM_UP."""
+  pos, xyaxes = mount
+  forearm = spec.body("forearm")
+  forearm.pos = list(pos)
+  forearm.alt.type = mujoco.mjtOrientation.mjORIENTATION_XYAXES
+  forearm.alt.xyaxes = list(xyaxes)

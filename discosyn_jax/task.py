@@ -64,6 +64,9 @@ class Task(abc.ABC):
   def success(self, view: PhysicsView, info: Info) -> jax.Array:
     """1.0 where the episode counts as solved if it ended in this state, else 0.0."""
 
+  def show(self, model: mujoco.MjModel, data: mujoco.MjData, info: Info) -> None:
+    """Draw an episode's own values (e.g. a goal) into `data` before it is rendered."""
+
   def terminated(self, view: PhysicsView, info: Info) -> jax.Array:
     """1.0 where the episode ends before its time limit (e.g. a dropped object)."""
     del view, info

@@ -9,6 +9,7 @@ and the compile time of one jitted env step per backend. One env step = 10 physi
 
   python experiments/bench_physics.py                       # CPU: mjx at batch 16 only
   python experiments/bench_physics.py --mjx-batches 16 64 256 --steps 100   # on a GPU
+  python experiments/bench_physics.py --tasks set2 unseen sparse --mjx-batches   # native only
 """
 
 from __future__ import annotations
@@ -83,7 +84,7 @@ def env_steps(env, batch: int, steps: int) -> tuple[float, float]:
 
 def main():
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-  parser.add_argument("--tasks", nargs="+", default=list(tasks.TASK_SETS["set1"]))
+  parser.add_argument("--tasks", nargs="+", default=["set1"], help="tasks or task sets")
   parser.add_argument("--batches", type=int, nargs="+", default=[16, 64, 256])
   parser.add_argument("--mjx-batches", type=int, nargs="*", default=[16])
   parser.add_argument("--steps", type=int, default=100, help="control steps per timed run")
@@ -96,7 +97,8 @@ def main():
         f"{nthread} native threads; env steps/s, 1 env step = 10 physics steps of 4 ms\n")
   print("| task | batch | rollout | batch | native | native/rollout | mjx | compile native s | compile mjx s |")
   print("|---|---|---|---|---|---|---|---|---|")
-  for name in args.tasks:
+  names = [n for name in args.tasks for n in tasks.TASK_SETS.get(name, (name,))]
+  for name in names:
     native = tasks.make(name, backend="native")
     mjx_env = tasks.make(name, backend="mjx") if args.mjx_batches else None
     for batch in args.batches:

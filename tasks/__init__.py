@@ -8,7 +8,7 @@ from typing import Callable
 import discosyn_jax  # noqa: F401  (sets XLA flags before jax is imported)
 from discosyn_jax.env import HandEnv
 from discosyn_jax.task import Task, TaskConfig
-from tasks import valve
+from tasks import dice, screw, valve, valve_goal, weight_pull
 
 
 @dataclasses.dataclass(frozen=True)
@@ -27,10 +27,34 @@ REGISTRY: dict[str, Entry] = {
                     "turn a two-armed (T) valve counter-clockwise"),
     "valve3": Entry(valve.Valve, lambda **kw: valve.default_config(arms=3, **kw),
                     "turn a three-armed valve counter-clockwise"),
+    # task set #2 (with valve3)
+    "dice": Entry(dice.Dice, dice.default_config,
+                  "palm up: turn a free cube to a random goal orientation"),
+    "weight_pull": Entry(weight_pull.WeightPull, weight_pull.default_config,
+                         "lift a weight by pulling up the rope tied to it"),
+    "screw": Entry(screw.Screw, screw.default_config,
+                   "roll a horizontal screwdriver with the fingers to drive it in"),
+    # unseen tasks (learned with a frozen synergy decoder)
+    "valve_cylinder": Entry(valve.Valve, lambda **kw: valve.default_config(shape="wheel", **kw),
+                            "turn a round wheel valve counter-clockwise"),
+    "valve_cw": Entry(valve.Valve, lambda **kw: valve.default_config(
+                          arms=3, direction=-1.0, success_turn=1.2, **kw),
+                      "turn the three-armed valve clockwise"),
+    "screw_topdown": Entry(screw.Screw, lambda **kw: screw.default_config(topdown=True, **kw),
+                           "drive an upright screwdriver in, clockwise from above"),
+    # the sparse goal valve, and its dense twin for debugging
+    "valve_goal": Entry(valve_goal.GoalValve, valve_goal.default_config,
+                        "turn the three-armed valve to a goal angle; reward 1 near it, else 0"),
+    "valve_goal_dense": Entry(valve_goal.GoalValve, lambda **kw: valve_goal.default_config(dense=True, **kw),
+                              "valve_goal with a dense reward 1 - |error| / pi (debugging)"),
 }
 
 TASK_SETS: dict[str, tuple[str, ...]] = {
     "set1": ("valve0", "valve1", "valve2", "valve3"),
+    # set #2's valve is valve3 itself, under its own name: one task, one set of statistics
+    "set2": ("dice", "valve3", "weight_pull", "screw"),
+    "unseen": ("valve_cylinder", "valve_cw", "screw_topdown"),
+    "sparse": ("valve_goal",),
 }
 
 

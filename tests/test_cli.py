@@ -9,9 +9,17 @@ from discosyn_jax import cli
 def test_tasks_lists_every_task_with_sizes(capsys):
   assert cli.main(["tasks"]) == 0
   out = capsys.readouterr().out
-  for name in ("valve0", "valve1", "valve2", "valve3"):
+  for name in ("valve0", "valve1", "valve2"):
     (line,) = [l for l in out.splitlines() if l.startswith(name + " ")]
     assert line.split()[1:4] == ["27", "20", "set1"]
+  expected = {"valve3": ["27", "20", "set1,set2"], "dice": ["45", "20", "set2"],
+              "weight_pull": ["32", "20", "set2"], "screw": ["28", "20", "set2"],
+              "valve_cylinder": ["27", "20", "unseen"], "valve_cw": ["27", "20", "unseen"],
+              "screw_topdown": ["28", "20", "unseen"], "valve_goal": ["30", "20", "sparse"],
+              "valve_goal_dense": ["30", "20", "-"]}
+  for name, fields in expected.items():
+    (line,) = [l for l in out.splitlines() if l.startswith(name + " ")]
+    assert line.split()[1:4] == fields
 
 
 def test_demo_prints_a_row_per_task(capsys):

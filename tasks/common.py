@@ -1,0 +1,52 @@
+"""Pieces every task module uses: the hand's joint addresses, its noisy start pose, angles."""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import mujoco
+
+from discosyn_jax import hand
+
+
+class HandJoints:
+  """The hand's qpos addresses and ranges in one compiled model (looked up on the host)."""
+
+  def __init__(self, model: mujoco.MjModel):
+    self.qpos = jnp.asarray(hand.qpos_indices(model))
+    ids = [model.joint(j).id for j in hand.JOINTS]
+    self.lo = jnp.asarray(model.jnt_range[ids, 0], jnp.float32)
+    self.hi = jnp.asarray(model.jnt_range[ids, 1], jnp.float32)
+    self.qpos0 = jnp.asarray(model.qpos0, jnp.float32)  # the whole model's reference pose
+    self.nv = model.nv
+
+  def start_qpos(self, rng: jax.Array, noise: float) -> jax.Array:
+    """The model's reference qpos with the hand joints moved by uniform noise in +-`noise`."""
+    delta = noise * jax.random.uniform(rng, self.qpos.shape, minval=-1, maxval=1)
+    hand_q = jnp.clip(self.qpos0[self.qpos] + delta, self.lo, self.hi)
+    return self.qpos0.at[self.qpos].set(hand_q)
+
+  def zero_qvel(self) -> jax.Array:
+    return jnp.zeros(self.nv, jnp.float32)
+
+
+def joint_address(model: mujoco.MjModel, name: str) -> tuple[int, int]:
+  """(qpos address, qvel address) of joint `name`."""
+  joint = model.joint(name)
+  return int(joint.qposadr[0]), int(joint.dofadr[0])
+
+
+def wrap_angle(angle: jax.Array) -> jax.Array:
+  """`angle` in [-pi, pi)."""
+  return jnp.mod(angle + jnp.pi, 2 * jnp.pi) - jnp.pi
+
+
+def capped_speed(delta: jax.Array, dt: float, cap: float) -> jax.Array:
+  """Mean speed over a control step (`delta` / `dt`), clipped to +-`cap`: a rewarded speed."""
+  return jnp.clip(delta / dt, -cap, cap)
+
+
+def require(condition: bool, message: str) -> None:
+  """A bad config value: a ValueError that says which and why."""
+  if not condition:
+    raise ValueError(message)

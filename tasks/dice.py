@@ -1,0 +1,131 @@
+"""Reorient a dice on the upturned palm to a goal orientation (task set #2).
+
+The hand is mounted palm up (scene.PALM_UP); a free 0.05 m, 71 g cube starts resting on the
+palm, unrotated. The goal is its start orientation turned about a random axis by a random
+angle in [`goal_min_angle`, `goal_max_angle`].
+
+Observation (45): hand joint angles (24), dice position relative to its start (3), its
+quaternion (4), linear and angular velocity (6), the goal quaternion (4), the rotation
+still to do, goal * dice^-1, as a quaternion with w >= 0 (4).
+Reward: `reward_scale` * (1 - e / pi) + `reward_bias`, e the rotation angle between the
+dice and the goal (0..pi): positive per step, so dropping the dice (which ends the
+episode) costs the rest of the episode's reward. Success (Gymnasium-Robotics): e < 0.1
+rad with the dice still on the hand. Termination: the dice's centre falls `drop_height`
+below the palm's surface.
+
+Numbers, and why: goal angles from 0.4 rad up, so that doing nothing never succeeds
+(with goals from 0 rad, 6 % of episodes of a still hand would start solved); up to pi/2,
+a quarter turn, the reorientation a few finger gaits can do (Gym's full-random goals are
+the harder variant: goal_max_angle=pi). The measured random-policy rates are in
+docs/TASKS_NOTES.md.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import jax
+import jax.numpy as jnp
+import mujoco
+
+from discosyn_jax import scene
+from discosyn_jax.physics import PhysicsView
+from discosyn_jax.task import Info, Task, TaskConfig
+from tasks import common
+
+PALM_SURFACE_Z = 0.2361  # world height of the upturned palm's surface (scene.PALM_UP)
+
+
+@dataclasses.dataclass(frozen=True)
+class DiceConfig(TaskConfig):
+  goal_min_angle: float = 0.4  # rad
+  goal_max_angle: float = math.pi / 2  # rad
+  success_angle: float = 0.1  # rad
+  reward_scale: float = 1.0
+  reward_bias: float = 0.0
+  drop_height: float = 0.1  # m below the palm's surface: the dice has fallen
+
+
+def default_config(**overrides) -> DiceConfig:
+  return DiceConfig(**overrides)
+
+
+def quat_mul(a: jax.Array, b: jax.Array) -> jax.Array:
+  """Hamilton product of (w, x, y, z) quaternions."""
+  aw, av, bw, bv = a[0], a[1:], b[0], b[1:]
+  return jnp.concatenate([(aw * bw - av @ bv)[None], aw * bv + bw * av + jnp.cross(av, bv)])
+
+
+def quat_conj(q: jax.Array) -> jax.Array:
+  return q * jnp.array([1.0, -1.0, -1.0, -1.0])
+
+
+def rotation_angle(a: jax.Array, b: jax.Array) -> jax.Array:
+  """The angle (0..pi) of the rotation between unit quaternions a and b."""
+  dot = jnp.abs(jnp.sum(a * b)) / (jnp.linalg.norm(a) * jnp.linalg.norm(b))
+  return 2.0 * jnp.arccos(jnp.clip(dot, 0.0, 1.0))
+
+
+class Dice(Task):
+  scene = "dice"
+
+  def __init__(self, config: DiceConfig):
+    super().__init__(config)
+    common.require(0 <= config.goal_min_angle <= config.goal_max_angle <= math.pi,
+                   "need 0 <= goal_min_angle <= goal_max_angle <= pi, got "
+                   f"{config.goal_min_angle}, {config.goal_max_angle}")
+    common.require(config.success_angle > 0, f"success_angle must be > 0, not {config.success_angle}")
+    common.require(config.drop_height > 0, f"drop_height must be > 0, not {config.drop_height}")
+
+  def edit_spec(self, spec: mujoco.MjSpec) -> None:
+    scene.mount_hand(spec, scene.PALM_UP)
+
+  def bind(self, model: mujoco.MjModel) -> None:
+    self.hand = common.HandJoints(model)
+    self.dice_qpos, self.dice_qvel = common.joint_address(model, "dice")
+    self.start_pos = self.hand.qpos0[self.dice_qpos:self.dice_qpos + 3]
+
+  def initial_state(self, rng, model):
+    k_hand, k_axis, k_angle = jax.random.split(rng, 3)
+    axis = jax.random.normal(k_axis, (3,))
+    axis = axis / jnp.linalg.norm(axis)
+    angle = jax.random.uniform(k_angle, (), minval=self.config.goal_min_angle, maxval=self.config.goal_max_angle)
+    goal = jnp.concatenate([jnp.cos(angle / 2)[None], jnp.sin(angle / 2) * axis])
+    return self.hand.start_qpos(k_hand, self.config.hand_noise), self.hand.zero_qvel(), {"goal": goal}
+
+  def show(self, model: mujoco.MjModel, data: mujoco.MjData, info: Info) -> None:
+    """Turn the translucent goal cube beside the hand to the goal orientation."""
+    data.mocap_quat[model.body("dice_goal").mocapid[0]] = info["goal"]
+    mujoco.mj_kinematics(model, data)
+
+  def pos(self, view: PhysicsView) -> jax.Array:
+    return view.qpos[self.dice_qpos:self.dice_qpos + 3]
+
+  def quat(self, view: PhysicsView) -> jax.Array:
+    return view.qpos[self.dice_qpos + 3:self.dice_qpos + 7]
+
+  def error(self, view: PhysicsView, info: Info) -> jax.Array:
+    """Rotation angle between the dice and the goal, rad."""
+    return rotation_angle(self.quat(view), info["goal"])
+
+  def observation(self, view: PhysicsView, info: Info) -> jax.Array:
+    quat = self.quat(view)
+    todo = quat_mul(info["goal"], quat_conj(quat))
+    todo = jnp.where(todo[0] < 0, -todo, todo)
+    return jnp.concatenate([
+        view.qpos[self.hand.qpos], self.pos(view) - self.start_pos, quat,
+        view.qvel[self.dice_qvel:self.dice_qvel + 6], info["goal"], todo,
+    ])
+
+  def reward_terms(self, prev: PhysicsView, view: PhysicsView, info: Info) -> dict[str, jax.Array]:
+    cfg = self.config
+    return {"orientation": cfg.reward_scale * (1.0 - self.error(view, info) / jnp.pi),
+            "bias": jnp.full((), cfg.reward_bias)}
+
+  def terminated(self, view: PhysicsView, info: Info) -> jax.Array:
+    return (self.pos(view)[2] < PALM_SURFACE_Z - self.config.drop_height).astype(jnp.float32)
+
+  def success(self, view: PhysicsView, info: Info) -> jax.Array:
+    close = self.error(view, info) < self.config.success_angle
+    return (close & (self.terminated(view, info) == 0)).astype(jnp.float32)
