@@ -114,6 +114,7 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, f
       f"{config.unroll_length} steps)")
 
   bar = _progress(progress, start_step, config.steps)
+  shown = {}  # training success per task, as of the last rollout in which episodes ended
   last_good = checkpoints.latest(run_dir)
   with open(run_dir / "metrics.jsonl", "a") as metrics_file, \
        open(run_dir / "eval.jsonl", "a") as eval_file:
@@ -121,6 +122,9 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, f
     while int(state.step) < config.steps:
       state, metrics = train_step(state)
       metrics = {k: float(v) for k, v in jax.device_get(metrics).items()}
+      for name in config.tasks:  # no episode ended in this rollout: no return or success to log
+        if metrics.get(f"{name}/episodes") == 0:
+          del metrics[f"{name}/return"], metrics[f"{name}/success"]
       step = int(state.step)
       now = time.perf_counter()
       metrics.update(step=step, env_steps=step * config.env_steps_per_train_step,
@@ -135,8 +139,8 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, f
                                f"{where}")
       if bar is not None:
         bar.update(1)
-        bar.set_postfix_str(" ".join(
-            f"{n}:{metrics[f'{n}/success']:.0%}" for n in config.tasks[:6]))
+        shown.update({n: metrics[f"{n}/success"] for n in config.tasks if f"{n}/success" in metrics})
+        bar.set_postfix_str(" ".join(f"{n}:{v:.0%}" for n, v in list(shown.items())[:6]))
       if config.eval_every and step % config.eval_every == 0 and step < config.steps:
         _log_eval(eval_file, evaluate(trainer, state), step, config, now - start)
       if config.checkpoint_every and step % config.checkpoint_every == 0:

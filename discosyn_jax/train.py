@@ -176,7 +176,7 @@ class Trainer:
       params, opt_state = carry
       grads, (per_task, shared) = grad_fn(params, self.model, batch, cfg)
       updates, opt_state = self.optimizer.update(grads, opt_state, params)
-      shared = dict(shared, grad_norm=optax.global_norm(grads))
+      shared = dict(shared, grad_norm=optax.tree.norm(grads))
       return (optax.apply_updates(params, updates), opt_state), {"tasks": per_task, "shared": shared}
 
     def epoch(carry, key):
