@@ -17,6 +17,7 @@ import jax
 import orbax.checkpoint as ocp
 
 FINAL = "final"
+_ITEM = "default"  # CheckpointManager's folder for the one item of a step
 
 
 def _manager(run_dir: pathlib.Path, keep: int) -> ocp.CheckpointManager:
@@ -78,11 +79,15 @@ def restore(path: pathlib.Path, target):
   A checkpoint written for another config raises ValueError with one line saying so.
   """
   path = pathlib.Path(path)
+  if (path / _ITEM).is_dir():  # a periodic checkpoint: CheckpointManager keeps its item in a subfolder
+    path = path / _ITEM
   checkpointer = ocp.StandardCheckpointer()
   try:
     saved = checkpointer.metadata(path.resolve()).item_metadata
   except (FileNotFoundError, ValueError, KeyError, AttributeError) as err:
     raise ValueError(f"no readable checkpoint at {path} ({type(err).__name__})") from None
+  if saved is None:
+    raise ValueError(f"no readable checkpoint at {path}")
   wanted = _arrays(target)
   for name in sorted(set(saved) | set(wanted)):
     have = (tuple(saved[name].shape), saved[name].dtype) if name in saved else "absent"

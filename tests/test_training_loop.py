@@ -79,6 +79,12 @@ def test_resume_gives_the_same_state_as_an_unbroken_run(valve_run, tmp_path):
   assert (straight_dir / "final").is_dir() and (straight_dir / "checkpoints" / "2").is_dir()
   broken = tmp_path / "broken"
   loop.train(VALVE.replace(steps=2), broken, progress=False, log=lambda *_: None)
+  # the unbroken run's periodic checkpoint at step 2 holds this run's final state
+  trainer = Trainer(VALVE)
+  jax.tree.map(np.testing.assert_array_equal,
+               jax.device_get(loop.restore(trainer, straight_dir / "checkpoints" / "2")),
+               jax.device_get(loop.restore(trainer, broken / "final")))
+  shutil.rmtree(broken / "final")  # resume from the periodic checkpoint
   resumed = loop.train(VALVE, broken, resume=True, progress=False, log=lambda *_: None)
   a, b = jax.device_get(straight["state"]), jax.device_get(resumed["state"])
   assert int(b.step) == 4
