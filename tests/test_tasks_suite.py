@@ -68,6 +68,16 @@ def test_valve_variants_share_valve3s_physics(name):
     np.testing.assert_array_equal(getattr(ours, field), getattr(valve3, field))
 
 
+@pytest.mark.parametrize("name", ["valve_cw", "valve_goal"])
+def test_valve_variants_step_on_mjx(name):
+  """Their own task functions (direction, goal) jitted with MJX physics: finite and shaped."""
+  env = tasks.make(name, backend="mjx")
+  start, states = _scripted_trajectory(env, name, 3)
+  assert states.obs.shape == (3, 2, OBS_SIZE[name]) and states.reward.shape == (3, 2)
+  for leaf in jax.tree.leaves((start.obs, states.obs, states.reward, states.metrics)):
+    assert np.isfinite(np.asarray(leaf)).all()
+
+
 # steps of the scripted motion compared, and the object's tolerance (see the docstring)
 AGREE = {"dice": (25, 0.03), "weight_pull": (60, 0.005), "screw": (25, 0.1),
          "screw_topdown": (25, 0.1), "valve_cylinder": (25, 0.05)}
