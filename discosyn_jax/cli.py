@@ -12,21 +12,6 @@ class UsageError(Exception):
   """Bad input: reported as one line, exit status 2."""
 
 
-def _task_names(names: list[str]) -> list[str]:
-  import tasks
-
-  out = []
-  for name in names:
-    if name in tasks.TASK_SETS:
-      out += tasks.TASK_SETS[name]
-    elif name in tasks.REGISTRY:
-      out.append(name)
-    else:
-      raise UsageError(f"unknown task or task set {name!r}; tasks: {', '.join(tasks.REGISTRY)}; "
-                       f"sets: {', '.join(tasks.TASK_SETS)}")
-  return out
-
-
 def cmd_tasks(args) -> None:
   import tasks
 
@@ -46,7 +31,7 @@ def cmd_demo(args) -> None:
   print(f"random policy, {args.batch} envs x one episode per task")
   print(f"{'task':8s} {'backend':7s} {'obs':>4s} {'build s':>8s} {'compile s':>9s} {'env steps/s':>11s} "
         f"{'return':>7s} {'success':>7s} {'diverged':>8s}")
-  for name in _task_names(args.tasks):
+  for name in tasks.expand(args.tasks):
     start = time.perf_counter()
     env = tasks.make(name, backend=args.backend)
     built = time.perf_counter() - start
@@ -86,7 +71,7 @@ def cmd_render_scenes(args) -> None:
 
   out = pathlib.Path(args.out)
   out.mkdir(parents=True, exist_ok=True)
-  for name in _task_names(args.tasks):
+  for name in tasks.expand(args.tasks):
     env = tasks.make(name, backend="native")
     # a frame from the task's scripted motion (valves: the middle of a stroke, fingers dipped)
     actions = jnp.asarray(scripted.for_task(name, args.step, env.dt))
@@ -112,6 +97,7 @@ _TRAIN_FLAGS = {
 
 def train_config(args, base=None):
   """The preset (or, when resuming, the run's own config) with the flags given applied."""
+  import tasks
   from experiments import presets
 
   if base is None or args.preset is not None:
@@ -119,7 +105,7 @@ def train_config(args, base=None):
   changes = {field: getattr(args, flag) for flag, field in _TRAIN_FLAGS.items()
              if getattr(args, flag) is not None}
   if args.tasks:
-    changes["tasks"] = tuple(_task_names(args.tasks))
+    changes["tasks"] = tuple(tasks.expand(args.tasks))
   return base.replace(**changes).validate()
 
 
@@ -149,9 +135,7 @@ def cmd_eval(args) -> None:
   trainer = Trainer(config)
   state = loop.restore(trainer, checkpoint)
   results = loop.evaluate(trainer, state)
-  steps = int(jax.device_get(state.step))
-  print(loop.format_table(results, f"evaluation at step {steps} ({steps * config.env_steps_per_train_step:,} "
-                                   f"env steps, {config.eval_envs} deterministic episodes per task)"))
+  print(loop.format_table(results, int(jax.device_get(state.step)), config))
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -84,9 +84,11 @@ def evaluate(trainer: Trainer, state: TrainState) -> dict[str, dict[str, float]]
   return jax.tree.map(float, jax.device_get(out))
 
 
-def format_table(results: dict[str, dict[str, float]], title: str = "") -> str:
-  lines = [title] if title else []
-  lines.append(f"{'task':16s} {'success':>8s} {'return':>9s}")
+def format_table(results: dict[str, dict[str, float]], step: int, config: TrainConfig) -> str:
+  """The evaluation table that ends a run and that `discosyn eval` prints."""
+  lines = [f"evaluation at step {step} ({step * config.env_steps_per_train_step:,} env steps, "
+           f"{config.eval_envs} deterministic episodes per task)",
+           f"{'task':16s} {'success':>8s} {'return':>9s}"]
   for name, r in results.items():
     lines.append(f"{name:16s} {r['success']:8.1%} {r['return']:9.2f}")
   return "\n".join(lines)
@@ -150,9 +152,7 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, f
     results = evaluate(trainer, state)
     _log_eval(eval_file, results, int(state.step), config, time.perf_counter() - start)
   checkpoints.save(run_dir, state, config.keep_checkpoints, final=True)
-  log(format_table(results, f"evaluation at step {int(state.step)} "
-                   f"({int(state.step) * config.env_steps_per_train_step:,} env steps, "
-                   f"{config.eval_envs} deterministic episodes per task)"))
+  log(format_table(results, int(state.step), config))
   return {"results": results, "state": state, "compile_s": compile_s}
 
 

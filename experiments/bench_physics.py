@@ -97,8 +97,7 @@ def main():
         f"{nthread} native threads; env steps/s, 1 env step = 10 physics steps of 4 ms\n")
   print("| task | batch | rollout | batch | native | native/rollout | mjx | compile native s | compile mjx s |")
   print("|---|---|---|---|---|---|---|---|---|")
-  names = [n for name in args.tasks for n in tasks.TASK_SETS.get(name, (name,))]
-  for name in names:
+  for name in tasks.expand(args.tasks):
     native = tasks.make(name, backend="native")
     mjx_env = tasks.make(name, backend="mjx") if args.mjx_batches else None
     for batch in args.batches:

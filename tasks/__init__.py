@@ -82,5 +82,19 @@ def make(name: str, *, backend: str = "auto", **overrides) -> HandEnv:
   return HandEnv(entry(name).task(make_config(name, **overrides)), backend=backend)
 
 
+def expand(names) -> list[str]:
+  """Task names with every task set among them replaced by its tasks, in order."""
+  out = []
+  for name in names:
+    if name in TASK_SETS:
+      out += TASK_SETS[name]
+    elif name in REGISTRY:
+      out.append(name)
+    else:
+      raise ValueError(f"unknown task or task set {name!r}; tasks: {', '.join(REGISTRY)}; "
+                       f"sets: {', '.join(TASK_SETS)}")
+  return out
+
+
 def sets_of(name: str) -> list[str]:
   return [s for s, names in TASK_SETS.items() if name in names]
