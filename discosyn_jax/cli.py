@@ -138,6 +138,17 @@ def cmd_eval(args) -> None:
   print(loop.format_table(results, int(jax.device_get(state.step)), config))
 
 
+def cmd_experiment(args) -> None:
+  from experiments import paper
+
+  out = pathlib.Path(args.out)
+  print(f"experiment {args.name} at scale {args.scale}, seeds {' '.join(map(str, args.seeds))}, "
+        f"in {out}")
+  start = time.perf_counter()
+  paper.run(args.name, out, args.scale, tuple(args.seeds), progress=args.progress)
+  print(f"experiment {args.name} finished in {(time.perf_counter() - start) / 60:.1f} min")
+
+
 def build_parser() -> argparse.ArgumentParser:
   parser = argparse.ArgumentParser(prog="discosyn", description=__doc__)
   sub = parser.add_subparsers(dest="command", required=True)
@@ -165,6 +176,16 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("--episodes", type=int, help="episodes per task (default: the run's eval_envs)")
   p.add_argument("--backend", choices=["auto", "native", "mjx"])
   p.set_defaults(fn=cmd_eval)
+
+  p = sub.add_parser("experiment", help="run one of the paper's experiments, or all, at a scale "
+                     "(experiments/paper.py); finished steps are kept, unfinished ones resumed")
+  p.add_argument("name", help="discosyn-set1 | discosyn-set2 | baselines-set1 | baselines-set2 | "
+                 "transfer | sparse | all")
+  p.add_argument("--scale", default="cpu", help="ci (seconds per run) | cpu (minutes) | gpu")
+  p.add_argument("--seeds", type=int, nargs="+", default=[0])
+  p.add_argument("--out", default="runs/experiments", help="folder of the experiment's runs")
+  p.add_argument("--progress", action="store_true", help="a progress bar per run")
+  p.set_defaults(fn=cmd_experiment)
 
   p = sub.add_parser("demo", help="build task scenes, step them with random actions, print figures")
   p.add_argument("tasks", nargs="*", default=["set1"], help="tasks or task sets (default: set1)")
