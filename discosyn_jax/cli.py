@@ -149,6 +149,14 @@ def cmd_experiment(args) -> None:
   print(f"experiment {args.name} finished in {(time.perf_counter() - start) / 60:.1f} min")
 
 
+def cmd_report(args) -> None:
+  from discosyn_jax import report
+
+  path = report.write(args.runs, pathlib.Path(args.out), threshold=args.threshold,
+                      with_tsne=not args.no_tsne, force=args.force)
+  print(path)
+
+
 def build_parser() -> argparse.ArgumentParser:
   parser = argparse.ArgumentParser(prog="discosyn", description=__doc__)
   sub = parser.add_subparsers(dest="command", required=True)
@@ -186,6 +194,16 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("--out", default="runs/experiments", help="folder of the experiment's runs")
   p.add_argument("--progress", action="store_true", help="a progress bar per run")
   p.set_defaults(fn=cmd_experiment)
+
+  p = sub.add_parser("report", help="REPORT.md and figures from run folders: solved tasks, "
+                     "explained variance, curves, t-SNE, transfer, sparse reward")
+  p.add_argument("runs", nargs="+", help="run folders, synergy-fit folders, or folders of them")
+  p.add_argument("--out", default="report", help="folder for REPORT.md and its figures")
+  p.add_argument("--threshold", type=float, default=0.8,
+                 help="final success rate at or above which a task counts as solved")
+  p.add_argument("--no-tsne", action="store_true", help="skip the t-SNE (it rolls policies out)")
+  p.add_argument("--force", action="store_true", help="replace a report already in --out")
+  p.set_defaults(fn=cmd_report)
 
   p = sub.add_parser("demo", help="build task scenes, step them with random actions, print figures")
   p.add_argument("tasks", nargs="*", default=["set1"], help="tasks or task sets (default: set1)")

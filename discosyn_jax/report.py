@@ -1,0 +1,359 @@
+"""`discosyn report RUN_DIRS...`: the paper's tables and figures from run folders.
+
+Writes OUT/REPORT.md and PNG figures beside it:
+  - tables of solved tasks per task set, in the paper's layout (a row per method, a column
+    per task), each cell with the final deterministic success (mean and spread over seeds,
+    the number of seeds) and the paper's mark beside it;
+  - explained variance of the sequential baselines' PCA / autoencoder fits;
+  - training curves (evaluation success against env steps of that task, per method);
+  - t-SNE of the z the DiscoSyn policy picks, coloured by task (the paper's Fig. 6);
+  - transfer to unseen tasks and the sparse goal valve: curves and steps to the first reward.
+
+"Solved" is: the mean over seeds of the final evaluation's success >= `threshold`.
+A run's method and set come from its experiment.json (written by `discosyn experiment`), or
+else from its config.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import json
+import pathlib
+from typing import Any
+
+import numpy as np
+
+from discosyn_jax import config as config_lib
+from discosyn_jax.config import TrainConfig
+
+# The paper's Tables I and II (1 = solved, columns in these tasks' order) and its PCA
+# explained variance on set #1.
+PAPER_TASKS = {"set1": ("valve0", "valve1", "valve2", "valve3"),
+               "set2": ("dice", "valve3", "weight_pull", "screw")}
+PAPER_SOLVED = {
+    "set1": {"PCA4": "0000", "AE4": "1011", "PCA6": "1001", "AE6": "1011", "DiscoSyn3-L": "1111",
+             "DiscoSyn3-NL": "1111", "DiscoSyn4-L": "1111", "DiscoSyn4-NL": "1111"},
+    "set2": {"PCA4": "0001", "AE4": "1001", "PCA6": "1001", "AE6": "1001", "DiscoSyn4-L": "1100",
+             "DiscoSyn4-NL": "1111", "DiscoSyn6-L": "1111", "DiscoSyn6-NL": "1111"},
+}
+PAPER_PCA_VARIANCE = {"set1": {3: 0.415, 4: 0.508, 6: 0.628}}
+METHOD_ORDER = ("PPO", "PCA4", "AE4", "PCA6", "AE6", "DiscoSyn3-L", "DiscoSyn3-NL", "DiscoSyn4-L",
+                "DiscoSyn4-NL", "DiscoSyn6-L", "DiscoSyn6-NL")
+MAIN_EXPERIMENTS = ("discosyn", "baselines")
+
+
+def read_jsonl(path: pathlib.Path) -> list[dict[str, Any]]:
+  path = pathlib.Path(path)
+  if not path.is_file():
+    return []
+  return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+
+
+@dataclasses.dataclass
+class Run:
+  path: pathlib.Path
+  config: TrainConfig
+  experiment: str
+  method: str
+  task_set: str
+  seed: int
+  evals: list[dict[str, Any]]
+  finished: bool
+
+  @property
+  def final(self) -> dict[str, Any]:
+    return self.evals[-1] if self.evals else {}
+
+  def per_task_env_steps(self, row) -> int:
+    return row["step"] * self.config.num_envs * self.config.unroll_length
+
+
+def _method_of(config: TrainConfig) -> str:
+  if config.decoder == "identity":
+    return "PPO"
+  b, kind = config.n_synergies, "L" if config.decoder == "linear" else "NL"
+  if config.decoder_from:
+    return f"DiscoSyn{b}-{kind} frozen"
+  return f"DiscoSyn{b}-{kind}"
+
+
+def _set_of(config: TrainConfig) -> str:
+  import tasks
+
+  for name, members in tasks.TASK_SETS.items():
+    if tuple(members) == tuple(config.tasks):
+      return name
+  return "+".join(config.tasks)
+
+
+def load_run(path: pathlib.Path) -> Run:
+  config = config_lib.load(path / "config.json")
+  meta_file = path / "experiment.json"
+  meta = json.loads(meta_file.read_text()) if meta_file.is_file() else {}
+  return Run(path=path, config=config, experiment=meta.get("experiment", "train"),
+             method=meta.get("method", _method_of(config)), task_set=meta.get("set", _set_of(config)),
+             seed=meta.get("seed", config.seed), evals=read_jsonl(path / "eval.jsonl"),
+             finished=(path / "final").is_dir())
+
+
+def find(paths) -> tuple[list[Run], list[dict[str, Any]]]:
+  """The runs and the synergy fits in `paths` (run folders, fit folders, or folders of them)."""
+  runs, fits = [], []
+  for path in map(pathlib.Path, paths):
+    if not path.is_dir():
+      raise ValueError(f"{path} is not a folder")
+    if (path / "config.json").is_file():
+      runs.append(load_run(path))
+    elif (path / "explained_variance.json").is_file():
+      fits.append(json.loads((path / "explained_variance.json").read_text()))
+    else:
+      inner = sorted(p for p in path.iterdir() if p.is_dir())
+      found = find(inner) if inner else ([], [])
+      if not found[0] and not found[1]:
+        raise ValueError(f"{path} holds no run (config.json) and no synergy fit")
+      runs += found[0]
+      fits += found[1]
+  return runs, fits
+
+
+# -- tables ---------------------------------------------------------------------
+def _success(runs: list[Run], task: str) -> np.ndarray:
+  return np.array([r.final[f"{task}/success"] for r in runs if f"{task}/success" in r.final])
+
+
+def _cell(values: np.ndarray, threshold: float, paper: str | None) -> str:
+  if values.size == 0:
+    return "–"
+  mean = values.mean()
+  mark = "✓" if mean >= threshold else "✗"
+  spread = f" ± {values.std():.0%}" if values.size > 1 else ""
+  paper_mark = "" if paper is None else f" (paper {'✓' if paper == '1' else '✗'})"
+  return f"{mark} {mean:.0%}{spread} [{values.size}]{paper_mark}"
+
+
+def _order(methods) -> list[str]:
+  known = [m for m in METHOD_ORDER if m in methods]
+  return known + sorted(set(methods) - set(known))
+
+
+def solved_tables(runs: list[Run], threshold: float) -> str:
+  lines = []
+  main = [r for r in runs if r.experiment.split("-")[0] in MAIN_EXPERIMENTS or r.experiment == "train"]
+  for task_set in sorted({r.task_set for r in main}):
+    in_set = [r for r in main if r.task_set == task_set]
+    task_names = list(in_set[0].config.tasks)
+    paper = PAPER_SOLVED.get(task_set, {})
+    lines += [f"### {task_set}: tasks solved (success >= {threshold:.0%})", "",
+              "| method | " + " | ".join(task_names) + " | solved |",
+              "|---" * (len(task_names) + 2) + "|"]
+    for method in _order({r.method for r in in_set}):
+      group = [r for r in in_set if r.method == method]
+      cells, solved = [], 0
+      paper_tasks = PAPER_TASKS.get(task_set, ())
+      for task in task_names:
+        values = _success(group, task)
+        mark = (paper[method][paper_tasks.index(task)]
+                if method in paper and task in paper_tasks else None)
+        cells.append(_cell(values, threshold, mark))
+        solved += bool(values.size and values.mean() >= threshold)
+      paper_count = (f" (paper {paper[method].count('1')}/4)"
+                     if method in paper and set(paper_tasks) == set(task_names) else "")
+      unfinished = sum(not r.finished for r in group)
+      note = f", {unfinished} unfinished" if unfinished else ""
+      lines.append(f"| {method} | " + " | ".join(cells) +
+                   f" | {solved}/{len(task_names)}{paper_count}{note} |")
+    lines.append("")
+  return "\n".join(lines)
+
+
+def variance_table(fits: list[dict[str, Any]]) -> str:
+  if not fits:
+    return "No synergy fits among the folders given.\n"
+  sizes = sorted({int(k) for f in fits for m in ("PCA", "AE") for k in f.get(m, {})})
+  lines = ["| set | method | " + " | ".join(f"k = {k}" for k in sizes) + " | samples |",
+           "|---" * (len(sizes) + 3) + "|"]
+  for task_set in sorted({f["set"] for f in fits}):
+    group = [f for f in fits if f["set"] == task_set]
+    for method in ("PCA", "AE"):
+      cells = []
+      for k in sizes:
+        values = np.array([f[method][str(k)] for f in group if str(k) in f.get(method, {})])
+        cell = "–" if values.size == 0 else f"{values.mean():.1%}" + (
+            f" ± {values.std():.1%}" if values.size > 1 else "")
+        paper = PAPER_PCA_VARIANCE.get(task_set, {}).get(k) if method == "PCA" else None
+        cells.append(cell + (f" (paper {paper:.1%})" if paper is not None else ""))
+      samples = ", ".join(str(f["samples"]) for f in group)
+      lines.append(f"| {task_set} | {method} | " + " | ".join(cells) + f" | {samples} |")
+  lines.append("| any | DiscoSyn | " + " | ".join("100% (by construction)" for _ in sizes) + " | |")
+  return "\n".join(lines) + "\n"
+
+
+def first_reward(run: Run, task: str) -> tuple[int, int] | None:
+  """(env steps of the task, control steps of each env) until the first non-zero reward of
+  `task` in training, or None when none was seen (or the run did not log it)."""
+  cfg = run.config
+  for row in read_jsonl(run.path / "metrics.jsonl"):
+    t = row.get(f"{task}/first_reward_t")
+    if t is not None and t < cfg.unroll_length:
+      before = row["step"] - 1  # train steps before the one that saw it
+      return (before * cfg.num_envs * cfg.unroll_length + (int(t) + 1) * cfg.num_envs,
+              before * cfg.unroll_length + int(t) + 1)
+  return None
+
+
+# -- figures ----------------------------------------------------------------------
+def curves(runs: list[Run], path: pathlib.Path, title: str, metric: str = "success") -> pathlib.Path:
+  """Evaluation `metric` against env steps of each task: a panel per task, a line per
+  method (mean over seeds; the band spans the seeds)."""
+  import matplotlib
+
+  matplotlib.use("Agg")
+  import matplotlib.pyplot as plt
+
+  task_names = list(dict.fromkeys(t for r in runs for t in r.config.tasks))
+  fig, axes = plt.subplots(1, len(task_names), figsize=(4 * len(task_names), 3.2), squeeze=False)
+  for ax, task in zip(axes[0], task_names):
+    for method in _order({r.method for r in runs if task in r.config.tasks}):
+      group = [r for r in runs if r.method == method and task in r.config.tasks and r.evals]
+      if not group:
+        continue
+      steps = sorted({r.per_task_env_steps(row) for r in group for row in r.evals})
+      table = np.full((len(group), len(steps)), np.nan)
+      for i, r in enumerate(group):
+        for row in r.evals:
+          table[i, steps.index(r.per_task_env_steps(row))] = row.get(f"{task}/{metric}", np.nan)
+      mean = np.nanmean(table, axis=0)
+      line, = ax.plot(steps, mean, label=f"{method} [{len(group)}]")
+      if len(group) > 1:
+        ax.fill_between(steps, np.nanmin(table, axis=0), np.nanmax(table, axis=0),
+                        color=line.get_color(), alpha=0.2)
+    ax.set_title(task)
+    ax.set_xlabel("env steps of the task")
+    ax.set_ylabel(f"evaluation {metric}")
+    ax.grid(alpha=0.3)
+  axes[0][-1].legend(fontsize=7, loc="best")
+  fig.suptitle(title)
+  fig.tight_layout()
+  fig.savefig(path, dpi=90)
+  plt.close(fig)
+  return path
+
+
+def tsne(run: Run, path: pathlib.Path, episodes: int = 8, points: int = 2000,
+         make_trainer=None) -> pathlib.Path:
+  """t-SNE of the z the deterministic policy picks on each task (the paper's Fig. 6)."""
+  import jax
+  import matplotlib
+
+  matplotlib.use("Agg")
+  import matplotlib.pyplot as plt
+  from sklearn.manifold import TSNE
+
+  from discosyn_jax import loop
+  from discosyn_jax.train import Trainer
+
+  config, checkpoint = loop.load_run(run.path)
+  trainer = (make_trainer or Trainer)(config)
+  state = loop.restore(trainer, checkpoint)
+  rollouts = trainer.rollouts(state.params, state.normalizers, jax.random.PRNGKey(0), episodes)
+  rng = np.random.default_rng(0)
+  zs, labels = [], []
+  for n, (task, traj) in enumerate(rollouts.items()):
+    z = np.asarray(traj["z"])[np.asarray(traj["alive"]) > 0]
+    keep = rng.permutation(len(z))[:points // len(rollouts)]
+    zs.append(z[keep])
+    labels += [n] * len(keep)
+  z = np.concatenate(zs)
+  embedded = TSNE(n_components=2, perplexity=min(30.0, len(z) / 4), random_state=0).fit_transform(z)
+  fig, ax = plt.subplots(figsize=(5, 4.5))
+  labels = np.array(labels)
+  for n, task in enumerate(rollouts):
+    ax.scatter(*embedded[labels == n].T, s=4, label=task)
+  ax.legend(markerscale=3, fontsize=8)
+  ax.set_title(f"t-SNE of z: {run.method} on {run.task_set} (seed {run.seed})")
+  ax.set_xticks([])
+  ax.set_yticks([])
+  fig.tight_layout()
+  fig.savefig(path, dpi=90)
+  plt.close(fig)
+  return path
+
+
+# -- the report ------------------------------------------------------------------
+def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = True,
+          force: bool = False, make_trainer=None) -> pathlib.Path:
+  """Write OUT/REPORT.md and its figures; return the REPORT.md path."""
+  if not 0 < threshold <= 1:
+    raise ValueError(f"the success threshold must be in (0, 1], not {threshold}")
+  runs, fits = find(paths)
+  if not runs and not fits:
+    raise ValueError("no runs among the folders given")
+  out = pathlib.Path(out)
+  if (out / "REPORT.md").exists() and not force:
+    raise ValueError(f"{out} already holds a report; pass --force to replace it")
+  out.mkdir(parents=True, exist_ok=True)
+
+  date = datetime.date.today().isoformat()
+  lines = [f"# DiscoSyn-JAX report ({date})", "",
+           f"{len(runs)} runs and {len(fits)} synergy fits from: "
+           + ", ".join(f"`{p}`" for p in paths) + ".",
+           f"A task is *solved* when the mean over seeds of the final deterministic evaluation's "
+           f"success is at least {threshold:.0%}. Cells: mark, mean success, ± standard deviation "
+           "over seeds, [seeds], and the paper's mark (Tables I and II).", ""]
+  scales = sorted({json.loads((r.path / "experiment.json").read_text()).get("scale", "?")
+                   for r in runs if (r.path / "experiment.json").is_file()})
+  if scales:
+    lines += [f"Scales: {', '.join(scales)}.", ""]
+
+  lines += ["## Tasks solved", "", solved_tables(runs, threshold)]
+  lines += ["## Explained variance of the action data", "",
+            "PCA and autoencoder fitted to the deterministic actions of the independent "
+            "full-action policies of each set (all tasks pooled).", "", variance_table(fits)]
+
+  lines += ["## Training curves", ""]
+  main = [r for r in runs if r.experiment.split("-")[0] in MAIN_EXPERIMENTS or r.experiment == "train"]
+  for task_set in sorted({r.task_set for r in main}):
+    group = [r for r in main if r.task_set == task_set]
+    name = f"curves-{task_set}.png".replace("+", "_")
+    curves(group, out / name, f"{task_set}: deterministic evaluation success")
+    lines += [f"![{task_set}]({name})", ""]
+
+  if with_tsne:
+    lines += ["## t-SNE of the low-dimensional actions", ""]
+    for task_set in sorted({r.task_set for r in main}):
+      disco = [r for r in main if r.method.startswith("DiscoSyn") and r.evals]
+      disco = [r for r in disco if r.task_set == task_set]
+      if not disco:
+        continue
+      best = max(disco, key=lambda r: (np.mean([r.final.get(f"{t}/success", 0)
+                                                for t in r.config.tasks]), -r.seed))
+      name = f"tsne-{task_set}.png".replace("+", "_")
+      tsne(best, out / name, make_trainer=make_trainer)
+      lines += [f"{best.method} (its best-scoring run on {task_set}, `{best.path.name}`):", "",
+                f"![t-SNE {task_set}]({name})", ""]
+
+  for experiment, heading in (("transfer", "Transfer to unseen tasks"),
+                              ("sparse", "The sparse goal valve")):
+    group = [r for r in runs if r.experiment == experiment]
+    if not group:
+      continue
+    lines += [f"## {heading}", "", "| method | task | final success | first reward: env steps "
+              "of the task (control steps per env) |", "|---|---|---|---|"]
+    for run in sorted(group, key=lambda r: (r.task_set, r.method, r.seed)):
+      for task in run.config.tasks:
+        success = run.final.get(f"{task}/success")
+        first = first_reward(run, task)
+        first_text = f"{first[0]:,} ({first[1]:,})" if first else "none seen"
+        lines.append(f"| {run.method} (seed {run.seed}) | {task} | "
+                     f"{'–' if success is None else f'{success:.0%}'} | {first_text} |")
+    name = f"{experiment}.png"
+    curves(group, out / name, f"{heading}: deterministic evaluation success")
+    lines += ["", f"![{experiment}]({name})", ""]
+    if experiment == "sparse":
+      curves(group, out / "sparse-return.png", "sparse goal valve: evaluation return", "return")
+      lines += ["![sparse return](sparse-return.png)", ""]
+
+  report = out / "REPORT.md"
+  report.write_text("\n".join(lines))
+  return report

@@ -1,0 +1,214 @@
+"""The paper's pipelines end to end at the ci scale, on tiny pure-JAX tasks: full-action
+PPO, collection, PCA / autoencoder fits, frozen-space training, transfer of a DiscoSyn
+decoder, the sparse-reward comparison and the report."""
+
+import json
+import pathlib
+
+import jax
+import numpy as np
+import pytest
+from sklearn.decomposition import PCA
+
+from discosyn_jax import checkpoints, cli, report, synergies
+from discosyn_jax.config import TrainConfig
+from discosyn_jax.train import Trainer, _episode_metrics
+from experiments import paper
+from tests.toy_env import ReachAction
+
+TARGET = np.linspace(-0.8, 0.8, 20)
+ENVS = {"a": lambda: ReachAction(TARGET), "b": lambda: ReachAction(-TARGET, obs_size=5),
+        "g": lambda: ReachAction(0.3 * TARGET)}
+SETS = {"set1": ("a", "b"), "sparse": ("g",)}
+DECODER = "params.params.synergy_decoder."
+
+
+def make_trainer(config):
+  return Trainer(config, envs=[ENVS[name]() for name in config.tasks])
+
+
+@pytest.fixture(scope="module")
+def experiments(tmp_path_factory):
+  out = tmp_path_factory.mktemp("experiments")
+  for name in ("baselines-set1", "sparse"):
+    paper.run(name, out, "ci", make_trainer=make_trainer, task_sets=SETS, log=lambda *a: None)
+  return out
+
+
+def final_decoder(run_dir):
+  return checkpoints.read_arrays(run_dir / "final", DECODER)
+
+
+# -- synergy models -------------------------------------------------------------
+def low_rank_actions(n=600, rank=3, seed=0):
+  rng = np.random.default_rng(seed)
+  return np.tanh(rng.normal(size=(n, rank)) @ rng.normal(size=(rank, 20)) * 0.4
+                 + 0.05 * rng.normal(size=(n, 20)))
+
+
+def test_pca_decoder_explains_its_eigenvalue_fractions():
+  actions = low_rank_actions()
+  for k in (1, 3, 6):
+    params, ev = synergies.fit_pca(actions, k)
+    pca = PCA(k).fit(actions)
+    assert ev == pytest.approx(pca.explained_variance_ratio_.sum(), abs=1e-6)
+    # the decoder reconstructs the data from unit-scale scores exactly as PCA does
+    scores = pca.transform(actions) / np.sqrt(pca.explained_variance_)
+    fields = dict(decoder="linear", n_synergies=k, decoder_bias=True, decoder_hidden=(128, 128))
+    rebuilt = synergies.decode(fields, params, scores)
+    assert synergies.explained_variance(actions, rebuilt) == pytest.approx(ev, abs=1e-5)
+  assert synergies.fit_pca(actions, 3)[1] > 0.95  # the data has rank 3 plus a little noise
+
+
+def test_autoencoder_code_is_standardised_into_the_decoder():
+  actions = low_rank_actions(n=400)
+  params, ev = synergies.fit_autoencoder(actions, 3, hidden=(32, 32), steps=400)
+  assert 0.5 < ev <= 1.0
+  fields = dict(decoder="mlp", n_synergies=3, decoder_bias=True, decoder_hidden=(32, 32))
+  # z = 0 decodes near the mean posture: the code was centred before folding
+  centre = synergies.decode(fields, params, np.zeros((1, 3)))[0]
+  spread = np.abs(actions - actions.mean(0)).mean()
+  assert np.abs(centre - actions.mean(0)).mean() < spread
+  with pytest.raises(ValueError, match="cannot fit 30 synergies"):
+    synergies.fit_autoencoder(actions, 30)
+
+
+def test_synergy_file_round_trip_and_mismatch(tmp_path):
+  params, ev = synergies.fit_pca(low_rank_actions(), 4)
+  fields = dict(decoder="linear", n_synergies=4, decoder_bias=True, decoder_hidden=(128, 128))
+  path = synergies.save(tmp_path / "pca4.npz", params, fields, method="PCA", explained_variance=ev)
+  meta, loaded = synergies.read(path)
+  assert meta["method"] == "PCA" and meta["explained_variance"] == pytest.approx(ev)
+  np.testing.assert_array_equal(loaded["synergies"]["kernel"], params["synergies"]["kernel"])
+  config = TrainConfig(tasks=("a",), n_synergies=4, decoder_from=str(path), freeze_decoder=True)
+  assert synergies.load_decoder(path, config)["log_std"].shape == (20,)
+  with pytest.raises(ValueError, match="n_synergies = 4, the config asks for 3"):
+    synergies.load_decoder(path, config.replace(n_synergies=3))
+  (tmp_path / "bad.npz").write_text("not a zip")
+  with pytest.raises(ValueError, match="not a synergy file"):
+    synergies.read(tmp_path / "bad.npz")
+  with pytest.raises(ValueError, match="does not exist"):
+    synergies.read(tmp_path / "missing.npz")
+
+
+def test_first_reward_step_is_logged():
+  reward = np.zeros((6, 4))
+  reward[3, 2] = 1.0
+  traj = dict(done=np.zeros((6, 4)), reward=reward, episode_return=np.zeros((6, 4)),
+              metrics={"success": np.zeros((6, 4)), "diverged": np.zeros((6, 4))})
+  assert int(_episode_metrics(traj, np.zeros((6, 4)))["first_reward_t"]) == 3
+  traj["reward"] = np.zeros((6, 4))
+  assert int(_episode_metrics(traj, np.zeros((6, 4)))["first_reward_t"]) == 6
+
+
+def test_noiseless_decoder_acts_with_its_mean():
+  config = TrainConfig(tasks=("a",), n_synergies=3, decoder_noise=False, alpha3=0.0,
+                       num_envs=4, unroll_length=5, num_minibatches=2)
+  trainer = make_trainer(config)
+  state = trainer.init()
+  z, a, log_prob = trainer.act(state.params, 0, np.ones((4, 3)), jax.random.PRNGKey(1))
+  mean, _ = trainer.model.apply(state.params, z, method=trainer.model.decode)
+  np.testing.assert_allclose(a, mean, atol=1e-6)
+  with pytest.raises(ValueError, match="noiseless decoder"):
+    config.replace(alpha3=1e-3).validate()
+
+
+# -- pipelines -------------------------------------------------------------------
+def test_baselines_collect_fit_and_train_in_frozen_spaces(experiments):
+  fit = experiments / "synergies-set1-seed0"
+  variance = json.loads((fit / "explained_variance.json").read_text())
+  with np.load(fit / "actions.npz") as data:
+    assert set(data.files) == {"a", "b"}
+    actions = np.concatenate([data["a"], data["b"]])
+  assert actions.shape[1] == 20 and np.abs(actions).max() <= 1.0
+  assert variance["samples"] == actions.shape[0]
+  for k in (3, 4, 6):
+    expected = PCA(k).fit(actions).explained_variance_ratio_.sum()
+    assert variance["PCA"][str(k)] == pytest.approx(expected, abs=1e-5)
+    assert 0 < variance["AE"][str(k)] <= 1
+  for method, k in paper.BASELINES:
+    run_dir = experiments / f"{method.lower()}{k}-set1-seed0"
+    config = json.loads((run_dir / "config.json").read_text())
+    assert config["freeze_decoder"] and not config["decoder_noise"] and config["n_synergies"] == k
+    assert (run_dir / "final").is_dir()
+    _, source = synergies.read(fit / f"{method.lower()}{k}.npz")
+    trained = final_decoder(run_dir)
+    for name, value in jax.tree_util.tree_flatten_with_path(source)[0]:
+      dotted = ".".join(str(p.key) for p in name)
+      np.testing.assert_array_equal(trained[dotted], value)  # frozen: bit for bit
+
+
+def test_sparse_and_transfer_keep_the_source_decoder(experiments):
+  source = final_decoder(experiments / "discosyn3-l-set1-seed0")
+  frozen = experiments / "sparse-synergies-seed0"
+  trained = final_decoder(frozen)
+  assert source.keys() == trained.keys()
+  for name in source:
+    np.testing.assert_array_equal(trained[name], source[name])
+  meta = json.loads((frozen / "experiment.json").read_text())
+  assert meta == dict(experiment="sparse", method="DiscoSyn3-L frozen", set="sparse", seed=0,
+                      scale="ci")
+  scratch = json.loads((experiments / "sparse-ppo-seed0" / "config.json").read_text())
+  assert scratch["decoder"] == "identity" and scratch["tasks"] == ["g"]
+  rows = report.read_jsonl(frozen / "metrics.jsonl")
+  assert all("g/first_reward_t" in row for row in rows)
+
+
+def test_finished_steps_are_kept(experiments):
+  final = experiments / "pca4-set1-seed0" / "final"
+  before = final.stat().st_mtime_ns
+  logs = []
+  paper.run("baselines-set1", experiments, "ci", make_trainer=make_trainer, task_sets=SETS,
+            log=logs.append)
+  assert final.stat().st_mtime_ns == before
+  assert all("done already" in line for line in logs)
+  # another scale asks for another config: the finished run is not silently replaced
+  with pytest.raises(ValueError, match="does not match"):
+    paper.run("baselines-set1", experiments, "cpu", make_trainer=make_trainer, task_sets=SETS,
+              log=lambda *a: None)
+
+
+def test_report_lists_every_method_and_task(experiments, tmp_path):
+  path = report.write([experiments], tmp_path / "report", make_trainer=make_trainer)
+  text = path.read_text()
+  table = text.split("### set1")[1].split("###")[0].split("##")[0]
+  for method in ("PPO", "PCA4", "AE4", "PCA6", "AE6", "DiscoSyn3-L"):
+    row = next(line for line in table.splitlines() if line.startswith(f"| {method} |"))
+    assert row.count("[1]") == 2  # a cell per task, one seed behind each
+  assert "| a | b | solved |" in table
+  assert "| set1 | PCA |" in text and "| set1 | AE |" in text
+  assert "DiscoSyn3-L frozen (seed 0) | g |" in text and "PPO (seed 0) | g |" in text
+  for figure in ("curves-set1.png", "tsne-set1.png", "sparse.png", "sparse-return.png"):
+    assert (tmp_path / "report" / figure).stat().st_size > 1000
+    assert f"({figure})" in text
+  with pytest.raises(ValueError, match="already holds a report"):
+    report.write([experiments], tmp_path / "report", with_tsne=False)
+
+
+def test_report_mean_and_spread_over_seeds(tmp_path):
+  for seed, success in ((0, 1.0), (1, 0.5)):
+    run = tmp_path / f"run{seed}"
+    run.mkdir()
+    config = TrainConfig(tasks=("valve0", "valve1", "valve2", "valve3"), seed=seed)
+    (run / "config.json").write_text(json.dumps(config.to_dict()))
+    (run / "experiment.json").write_text(json.dumps(
+        dict(experiment="discosyn-set1", method="DiscoSyn3-L", set="set1", seed=seed, scale="cpu")))
+    row = {"step": 10, "env_steps": 0, **{f"valve{i}/success": success for i in range(4)},
+           **{f"valve{i}/return": 0.0 for i in range(4)}}
+    (run / "eval.jsonl").write_text(json.dumps(row) + "\n")
+  runs, _ = report.find([tmp_path])
+  table = report.solved_tables(runs, threshold=0.7)
+  assert "| DiscoSyn3-L | ✓ 75% ± 25% [2] (paper ✓) |" in table
+  assert "4/4 (paper 4/4)" in table
+  assert "✗" in report.solved_tables(runs, threshold=0.8)
+
+
+def test_cli_rejects_bad_input(tmp_path, capsys):
+  assert cli.main(["experiment", "nope", "--out", str(tmp_path)]) == 2
+  assert "unknown experiment 'nope'" in capsys.readouterr().err
+  assert cli.main(["experiment", "sparse", "--scale", "huge", "--out", str(tmp_path)]) == 2
+  assert "unknown scale 'huge'" in capsys.readouterr().err
+  (tmp_path / "empty").mkdir()
+  assert cli.main(["report", str(tmp_path / "empty"), "--out", str(tmp_path / "r")]) == 2
+  assert "holds no run" in capsys.readouterr().err
+  assert not (tmp_path / "r").exists()
