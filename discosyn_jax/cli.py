@@ -106,6 +106,15 @@ def train_config(args, base=None):
              if getattr(args, flag) is not None}
   if args.tasks:
     changes["tasks"] = tuple(tasks.expand(args.tasks))
+  if args.decoder_from:
+    from discosyn_jax import synergies
+
+    meta, _ = synergies.read(args.decoder_from)
+    frozen = synergies.frozen_fields(meta, args.decoder_from)
+    changes = {**frozen, **changes}  # flags given explicitly win (e.g. --alpha2)
+    if changes["decoder"] != frozen["decoder"] or changes["n_synergies"] != frozen["n_synergies"]:
+      raise UsageError(f"--decoder-from {args.decoder_from} holds a {frozen['decoder']} decoder "
+                       f"with {frozen['n_synergies']} synergies; drop --decoder / --synergies")
   return base.replace(**changes).validate()
 
 
@@ -145,7 +154,8 @@ def cmd_experiment(args) -> None:
   print(f"experiment {args.name} at scale {args.scale}, seeds {' '.join(map(str, args.seeds))}, "
         f"in {out}")
   start = time.perf_counter()
-  paper.run(args.name, out, args.scale, tuple(args.seeds), progress=args.progress)
+  paper.run(args.name, out, args.scale, tuple(args.seeds), decoder_from=args.decoder_from,
+            progress=args.progress)
   print(f"experiment {args.name} finished in {(time.perf_counter() - start) / 60:.1f} min")
 
 
@@ -173,6 +183,8 @@ def build_parser() -> argparse.ArgumentParser:
                "eval-every", "eval-envs", "checkpoint-every"):
     p.add_argument(f"--{name}", type=int)
   p.add_argument("--backend", choices=["auto", "native", "mjx"])
+  p.add_argument("--decoder-from", help="learn in the frozen synergy space of a run folder or a "
+                 "synergy file (.npz): its decoder, no discriminator bonus or decoder entropy")
   p.add_argument("--out", help="run directory (default: runs/<preset>-seed<seed>)")
   p.add_argument("--resume", action="store_true", help="continue the run in --out")
   p.add_argument("--force", action="store_true", help="replace the run in --out")
@@ -192,6 +204,8 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("--scale", default="cpu", help="ci (seconds per run) | cpu (minutes) | gpu")
   p.add_argument("--seeds", type=int, nargs="+", default=[0])
   p.add_argument("--out", default="runs/experiments", help="folder of the experiment's runs")
+  p.add_argument("--decoder-from", help="transfer / sparse: the frozen decoder of this run folder "
+                 "or synergy file, instead of training their own DiscoSyn run first")
   p.add_argument("--progress", action="store_true", help="a progress bar per run")
   p.set_defaults(fn=cmd_experiment)
 

@@ -70,12 +70,16 @@ class Run:
 
 
 def _method_of(config: TrainConfig) -> str:
+  from discosyn_jax import synergies
+
   if config.decoder == "identity":
     return "PPO"
-  b, kind = config.n_synergies, "L" if config.decoder == "linear" else "NL"
-  if config.decoder_from:
-    return f"DiscoSyn{b}-{kind} frozen"
-  return f"DiscoSyn{b}-{kind}"
+  if not config.decoder_from:
+    return synergies.method_name(config)
+  try:  # a synergy file knows its method (PCA, AE); a run folder is DiscoSyn's
+    return synergies.method_name(synergies.read(config.decoder_from)[0]) + " frozen"
+  except ValueError:
+    return synergies.method_name(config) + " frozen"
 
 
 def _set_of(config: TrainConfig) -> str:

@@ -200,10 +200,21 @@ def load_decoder(path, config) -> dict:
   return params
 
 
-def describe(meta: dict[str, Any]) -> str:
-  """'PCA4', 'AE6', 'DiscoSyn3-L': the paper's names for a decoder."""
-  kind = meta.get("method")
-  if kind:
-    return f"{kind}{meta['n_synergies']}"
-  return f"DiscoSyn{meta['n_synergies']}-{'L' if meta['decoder'] == 'linear' else 'NL'}"
+def method_name(meta) -> str:
+  """The paper's name of a synergy model: 'PCA4', 'AE6', 'DiscoSyn3-L', 'DiscoSyn4-NL'.
+  `meta` is a synergy file's meta, or anything with the ARCHITECTURE fields (a config)."""
+  get = meta.get if isinstance(meta, dict) else lambda k, d=None: getattr(meta, k, d)
+  if get("method"):
+    return f"{get('method')}{get('n_synergies')}"
+  return f"DiscoSyn{get('n_synergies')}-{'L' if get('decoder') == 'linear' else 'NL'}"
+
+
+def frozen_fields(meta: dict[str, Any], path) -> dict[str, Any]:
+  """The TrainConfig fields of a run in the frozen synergy space of `path` (its `meta` as
+  `read` gives it): the decoder's architecture, frozen, no discriminator bonus and no
+  decoder entropy (constants here). Fitted PCA / autoencoder spaces act with their mean
+  (no noise outside the space); a DiscoSyn decoder keeps the noise it learned."""
+  fields = {k: meta[k] for k in ARCHITECTURE}
+  return dict(fields, decoder_from=str(pathlib.Path(path).resolve()), freeze_decoder=True,
+              decoder_noise="method" not in meta, alpha2=0.0, alpha3=0.0)
 

@@ -41,8 +41,6 @@ BASELINES = (("PCA", 4), ("AE", 4), ("PCA", 6), ("AE", 6))  # trained in, as in 
 FITTED_SIZES = (3, 4, 6)  # explained variance reported for these
 TRANSFER_FROM = {"unseen-set1": ("set1", 3, "linear"), "unseen-set2": ("set2", 6, "linear"),
                  "sparse": ("set1", 3, "linear")}
-# a frozen space: no discriminator bonus, no decoder entropy (both would be constants)
-FROZEN = dict(freeze_decoder=True, alpha2=0.0, alpha3=0.0)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -136,12 +134,13 @@ def _meta(experiment, method, task_set, seed, scale):
 class Planner:
   """The steps of each experiment at one scale and seed, folders named in OUT."""
 
-  def __init__(self, out: pathlib.Path, scale: str, seed: int, task_sets=None):
+  def __init__(self, out: pathlib.Path, scale: str, seed: int, task_sets=None, decoder_from=None):
     if scale not in SCALES:
       raise ValueError(f"unknown scale {scale!r}; scales: {', '.join(SCALES)}")
     self.out, self.scale, self.seed = pathlib.Path(out), scale, seed
     self.sets = {**TASK_SETS, **(task_sets or {})}
     self.sizes = SCALES[scale]
+    self.decoder_from = decoder_from  # transfer / sparse: this decoder instead of their own run
 
   def _config(self, base: TrainConfig, tasks, **changes) -> TrainConfig:
     return base.replace(tasks=tuple(tasks), seed=self.seed, **self.sizes.train,
@@ -151,9 +150,9 @@ class Planner:
     return f"{method.lower()}-{task_set}-seed{self.seed}"
 
   def discosyn(self, task_set: str, b: int, kind: str) -> Train:
-    method = f"DiscoSyn{b}-{'L' if kind == 'linear' else 'NL'}"
-    base = presets.preset(f"{task_set}-disco{b}-{kind}")
-    return Train(self._folder(method, task_set), self._config(base, self.sets[task_set]),
+    config = self._config(presets.preset(f"{task_set}-disco{b}-{kind}"), self.sets[task_set])
+    method = synergies.method_name(config)
+    return Train(self._folder(method, task_set), config,
                  _meta(f"discosyn-{task_set}", method, task_set, self.seed, self.scale))
 
   def ppo(self, task_set: str, experiment: str) -> Train:
@@ -170,10 +169,10 @@ class Planner:
                                                           self.scale))
     steps = [ppo, fit]
     for method, k in BASELINES:
-      source = (self.out / fit.name / f"{method.lower()}{k}.npz").resolve()
-      config = self._config(ppo.config, self.sets[task_set], decoder="linear" if method == "PCA" else "mlp",
-                            n_synergies=k, decoder_from=str(source), decoder_noise=False,
-                            init_z_std=1.0, **FROZEN)
+      meta = dict(decoder="linear" if method == "PCA" else "mlp", n_synergies=k,
+                  decoder_bias=True, decoder_hidden=hidden, method=method)  # as Fit writes it
+      frozen = synergies.frozen_fields(meta, self.out / fit.name / f"{method.lower()}{k}.npz")
+      config = self._config(ppo.config, self.sets[task_set], init_z_std=1.0, **frozen)
       steps.append(Train(self._folder(f"{method}{k}", task_set), config,
                          _meta(experiment, f"{method}{k}", task_set, self.seed, self.scale)))
     return steps
@@ -181,19 +180,24 @@ class Planner:
   def frozen_synergies(self, task_set: str, experiment: str) -> list:
     """The source DiscoSyn run, then a frozen-decoder run and a full-action run on `task_set`."""
     source_set, b, kind = TRANSFER_FROM[task_set]
-    source = self.discosyn(source_set, b, kind)
     base = presets.preset(f"{source_set}-disco{b}-{kind}")
+    if self.decoder_from:
+      meta, _ = synergies.read(self.decoder_from)
+      source, path = None, self.decoder_from
+    else:
+      source = self.discosyn(source_set, b, kind)
+      meta, path = {k: getattr(source.config, k) for k in synergies.ARCHITECTURE}, self.out / source.name
+    method = synergies.method_name(meta)
     # folders: transfer-synergies-set1-seed0 (unseen tasks of set #1), sparse-synergies-seed0
     label = task_set.removeprefix("unseen-")
     folder = lambda what: (f"{experiment}-{what}-seed{self.seed}" if label == experiment
                            else self._folder(f"{experiment}-{what}", label))
     frozen = Train(folder("synergies"),
-                   self._config(base, self.sets[task_set],
-                                decoder_from=str((self.out / source.name).resolve()), **FROZEN),
-                   _meta(experiment, f"{source.meta['method']} frozen", task_set, self.seed, self.scale))
+                   self._config(base, self.sets[task_set], **synergies.frozen_fields(meta, path)),
+                   _meta(experiment, f"{method} frozen", task_set, self.seed, self.scale))
     scratch = self.ppo(task_set, experiment)
     scratch = dataclasses.replace(scratch, name=folder("ppo"))
-    return [source, frozen, scratch]
+    return [step for step in (source, frozen, scratch) if step is not None]
 
   def plan(self, experiment: str) -> list:
     if experiment == "all":
@@ -222,12 +226,17 @@ EXPERIMENTS = ("discosyn-set1", "discosyn-set2", "baselines-set1", "baselines-se
 
 def run(experiment: str, out: pathlib.Path, scale: str, seeds=(0,), *,
         make_trainer: Callable[[TrainConfig], Any] | None = None, task_sets=None,
-        progress: bool = False, log=print) -> list[pathlib.Path]:
-  """Run (or continue) one experiment for every seed; the folders of its steps."""
+        decoder_from=None, progress: bool = False, log=print) -> list[pathlib.Path]:
+  """Run (or continue) one experiment for every seed; the folders of its steps.
+
+  `decoder_from` (a run folder or a synergy file) gives transfer and sparse a decoder
+  trained elsewhere instead of their own DiscoSyn run."""
+  if decoder_from and experiment not in ("transfer", "sparse"):
+    raise ValueError(f"a decoder can be given to transfer and sparse only, not to {experiment}")
   if make_trainer is None:
     from discosyn_jax.train import Trainer as make_trainer
   out = pathlib.Path(out)
-  plans = [Planner(out, scale, seed, task_sets).plan(experiment) for seed in seeds]
+  plans = [Planner(out, scale, seed, task_sets, decoder_from).plan(experiment) for seed in seeds]
   folders = []
   for steps in plans:
     for step in steps:

@@ -203,6 +203,34 @@ def test_report_mean_and_spread_over_seeds(tmp_path):
   assert "✗" in report.solved_tables(runs, threshold=0.8)
 
 
+def test_train_flag_decoder_from_sets_a_frozen_space(tmp_path):
+  params, ev = synergies.fit_pca(low_rank_actions(), 4)
+  fields = dict(decoder="linear", n_synergies=4, decoder_bias=True, decoder_hidden=(128, 128))
+  path = synergies.save(tmp_path / "pca4.npz", params, fields, method="PCA", explained_variance=ev)
+  args = cli.build_parser().parse_args(["train", "--tasks", "valve_goal", "--decoder-from", str(path)])
+  config = cli.train_config(args)
+  assert (config.decoder, config.n_synergies, config.freeze_decoder) == ("linear", 4, True)
+  assert not config.decoder_noise and config.alpha2 == config.alpha3 == 0
+  assert config.decoder_from == str(path.resolve()) and config.tasks == ("valve_goal",)
+  args = cli.build_parser().parse_args(["train", "--decoder-from", str(path), "--synergies", "3"])
+  with pytest.raises(cli.UsageError, match="holds a linear decoder with 4 synergies"):
+    cli.train_config(args)
+
+
+def test_transfer_from_a_given_decoder(experiments, tmp_path):
+  logs = []
+  paper.run("sparse", tmp_path, "ci", make_trainer=make_trainer, task_sets=SETS,
+            decoder_from=experiments / "ae4-set1-seed0" / ".." / "synergies-set1-seed0" / "ae4.npz",
+            log=logs.append)
+  assert not (tmp_path / "discosyn3-l-set1-seed0").exists()  # no DiscoSyn run of its own
+  meta = json.loads((tmp_path / "sparse-synergies-seed0" / "experiment.json").read_text())
+  assert meta["method"] == "AE4 frozen"
+  config = json.loads((tmp_path / "sparse-synergies-seed0" / "config.json").read_text())
+  assert config["decoder"] == "mlp" and not config["decoder_noise"]
+  with pytest.raises(ValueError, match="to transfer and sparse only"):
+    paper.run("discosyn-set1", tmp_path, "ci", decoder_from=tmp_path, task_sets=SETS)
+
+
 def test_cli_rejects_bad_input(tmp_path, capsys):
   assert cli.main(["experiment", "nope", "--out", str(tmp_path)]) == 2
   assert "unknown experiment 'nope'" in capsys.readouterr().err
