@@ -1,4 +1,4 @@
-"""The `discosyn` command: train, eval, tasks, demo, render-scenes."""
+"""The `discosyn` command: train, eval, synergies, render, tasks, demo, render-scenes."""
 
 from __future__ import annotations
 
@@ -125,17 +125,39 @@ def cmd_eval(args) -> None:
   import jax
 
   from discosyn_jax import loop
-  from discosyn_jax.train import Trainer
 
-  config, checkpoint = loop.load_run(pathlib.Path(args.run))
   changes = {"backend": args.backend} if args.backend else {}
   if args.episodes is not None:
     changes["eval_envs"] = args.episodes
-  config = config.replace(**changes).validate()
-  trainer = Trainer(config)
-  state = loop.restore(trainer, checkpoint)
+  trainer, state = loop.load_trained(args.run, **changes)
   results = loop.evaluate(trainer, state)
-  print(loop.format_table(results, int(jax.device_get(state.step)), config))
+  print(loop.format_table(results, int(jax.device_get(state.step)), trainer.config))
+
+
+def cmd_synergies(args) -> None:
+  from discosyn_jax import loop, synergy_pictures
+
+  run = pathlib.Path(args.run)
+  trainer, state = loop.load_trained(run, backend="native")  # physics on the host: pictures only
+  out = pathlib.Path(args.out) if args.out else run / "synergies"
+  paths = synergy_pictures.write(trainer, state.params, out, k=args.k, force=args.force,
+                                 title=f"{run.name} step {int(state.step)}:")
+  for path in paths:
+    print(path)
+
+
+def cmd_render(args) -> None:
+  from discosyn_jax import loop, videos
+
+  run = pathlib.Path(args.run)
+  trainer, state = loop.load_trained(run, backend="native")
+  videos.task_index(trainer.config, args.task)  # a bad task fails before any rollout
+  out = pathlib.Path(args.out) if args.out else run / "videos" / f"{args.task}.mp4"
+  written = videos.render_policy(trainer, state, args.task, out, episodes=args.episodes,
+                                 seed=args.seed, frame=args.frame, force=args.force)
+  for steps, ret, success in zip(written["steps"], written["return"], written["success"]):
+    print(f"episode: {steps} steps, return {ret:.2f}, success {success:.0f}")
+  print(f"{written['path']} ({written['frames']} frames)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -165,6 +187,27 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("--episodes", type=int, help="episodes per task (default: the run's eval_envs)")
   p.add_argument("--backend", choices=["auto", "native", "mjx"])
   p.set_defaults(fn=cmd_eval)
+
+  p = sub.add_parser("synergies", help="pictures of a run's synergies: the hand along each "
+                     "synergy, and the matrix of a linear decoder (needs EGL or OSMesa)")
+  p.add_argument("run", help="a run directory or a checkpoint folder in one")
+  p.add_argument("--out", help="folder for postures.png and matrix.png (default: RUN/synergies)")
+  p.add_argument("--k", type=float, default=1.0, help="the hand is shown at z = -k, 0, +k")
+  p.add_argument("--force", action="store_true", help="replace pictures already there")
+  p.set_defaults(fn=cmd_synergies)
+
+  p = sub.add_parser("render", help="a video (MP4 or GIF) of a run's deterministic policy on a "
+                     "task (needs EGL or OSMesa)")
+  p.add_argument("run", help="a run directory or a checkpoint folder in one")
+  p.add_argument("--task", required=True, help="one of the run's tasks")
+  p.add_argument("--out", help="an .mp4 or .gif file (default: RUN/videos/TASK.mp4); a .png "
+                 "with --frame")
+  p.add_argument("--episodes", type=int, default=1, help="episodes, one after another")
+  p.add_argument("--frame", type=int, help="write only this control step of the first episode "
+                 "as a PNG")
+  p.add_argument("--seed", type=int, default=0, help="draws the episodes' initial states")
+  p.add_argument("--force", action="store_true", help="replace the file if it exists")
+  p.set_defaults(fn=cmd_render)
 
   p = sub.add_parser("demo", help="build task scenes, step them with random actions, print figures")
   p.add_argument("tasks", nargs="*", default=["set1"], help="tasks or task sets (default: set1)")

@@ -77,6 +77,14 @@ def restore(trainer: Trainer, checkpoint: pathlib.Path) -> TrainState:
   return checkpoints.restore(checkpoint, trainer.init())
 
 
+def load_trained(path: pathlib.Path, **changes) -> tuple[Trainer, TrainState]:
+  """The trainer and the restored state of a run (its latest checkpoint) or of a checkpoint;
+  `changes` replace config fields that do not change the state's layout (backend, eval_envs)."""
+  config, checkpoint = load_run(pathlib.Path(path))
+  trainer = Trainer(config.replace(**changes).validate())
+  return trainer, restore(trainer, checkpoint)
+
+
 def evaluate(trainer: Trainer, state: TrainState) -> dict[str, dict[str, float]]:
   """Deterministic evaluation; its key depends on the step only, never on training's rng."""
   key = jax.random.fold_in(jax.random.PRNGKey(trainer.config.seed + 1), int(state.step))

@@ -68,6 +68,8 @@ class Trainer:
     self._eval = [wrappers.for_evaluation(env) for env in self.envs]
     self.train_step = jax.jit(self._train_step, donate_argnums=0)
     self.evaluate = jax.jit(self._evaluate)
+    # the evaluation's episodes of one task, with their states: `discosyn render`
+    self.episodes = jax.jit(self._episodes, static_argnames=("task", "n_envs", "keep_states"))
 
   # -- state -----------------------------------------------------------------
   def init(self, seed: int | None = None, decoder_params=None) -> TrainState:
@@ -195,27 +197,37 @@ class Trainer:
     return params, opt_state, jax.tree.map(jnp.mean, metrics)
 
   # -- evaluation -----------------------------------------------------------
+  def _episodes(self, params, normalizers, key, task: int, n_envs: int, keep_states: bool = False):
+    """`n_envs` deterministic episodes (head mean, decoder mean) of task `task`, no reset.
+
+    Returns (return, success) per env and, when `keep_states`, the env state after every
+    control step stacked along a leading time axis (for videos), else None.
+    """
+    env = self._eval[task]
+    state = env.reset(jax.random.split(key, n_envs))
+    zeros = jnp.zeros(n_envs)
+
+    def step(carry, _):
+      state, alive, ret, success = carry
+      _, a, _ = self.act(params, task, self._normalize(state.obs, normalizers[task]))
+      state = env.step(state, a)
+      ret = ret + alive * state.reward
+      ended = alive * state.done
+      success = jnp.where(ended > 0, state.metrics["success"], success)
+      return (state, alive * (1 - state.done), ret, success), (state if keep_states else None)
+
+    (_, _, ret, success), states = jax.lax.scan(
+        step, (state, jnp.ones_like(zeros), zeros, zeros), None,
+        length=self.envs[task].episode_length)
+    return ret, success, states
+
   def _evaluate(self, params, normalizers, key):
-    """One deterministic episode (head mean, decoder mean) per env and task:
+    """One deterministic episode per env and task:
     {task: {"return", "success"}} averaged over `eval_envs` episodes."""
     out = {}
-    for n, (name, env) in enumerate(zip(self.config.tasks, self._eval)):
+    for n, name in enumerate(self.config.tasks):
       key, sub = jax.random.split(key)
-      state = env.reset(jax.random.split(sub, self.config.eval_envs))
-      zeros = jnp.zeros(self.config.eval_envs)
-
-      def step(carry, _):
-        state, alive, ret, success = carry
-        _, a, _ = self.act(params, n, self._normalize(state.obs, normalizers[n]))
-        state = env.step(state, a)
-        ret = ret + alive * state.reward
-        ended = alive * state.done
-        success = jnp.where(ended > 0, state.metrics["success"], success)
-        return (state, alive * (1 - state.done), ret, success), None
-
-      (_, _, ret, success), _ = jax.lax.scan(
-          step, (state, jnp.ones_like(zeros), zeros, zeros), None,
-          length=self.envs[n].episode_length)
+      ret, success, _ = self._episodes(params, normalizers, sub, n, self.config.eval_envs)
       out[name] = {"return": ret.mean(), "success": success.mean()}
     return out
 
