@@ -2,19 +2,17 @@
 
 Headless machines need an OpenGL library: set MUJOCO_GL=egl (Debian/Ubuntu packages
 libegl1, libegl-mesa0 and libgl1-mesa-dri, software-rendered without a GPU) or MUJOCO_GL=osmesa
-(package libosmesa6). `discosyn render-scenes` picks egl when nothing is set.
+(package libosmesa6). On Linux without a display, importing discosyn_jax sets egl when
+nothing is set (MuJoCo reads the variable when it is imported).
 """
 
 from __future__ import annotations
 
-import os
 import pathlib
 from typing import Iterable, Iterator
 
 import mujoco
 import numpy as np
-
-os.environ.setdefault("MUJOCO_GL", "egl")
 
 
 def frames(model: mujoco.MjModel, data: mujoco.MjData, cameras=("front", "oblique"),
