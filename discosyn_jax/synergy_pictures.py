@@ -31,6 +31,10 @@ def hand_model() -> mujoco.MjModel:
   return scene.load_spec("hand").compile()
 
 
+def actuator_names(model: mujoco.MjModel) -> list[str]:
+  return [model.actuator(i).name for i in range(model.nu)]
+
+
 def decoded_actions(trainer, params, k: float) -> np.ndarray:
   """(b, 3, 20) decoder means at z = -k e_i, 0, +k e_i, clipped to the action box."""
   b = trainer.model.n_synergies
@@ -111,7 +115,5 @@ def write(trainer, params, out_dir: pathlib.Path, *, k: float = 1.0, force: bool
   plot_postures(images, k, paths[0], f"{title} {decoder} decoder: hand at z = -k, 0, +k".strip())
   if decoder == "linear":
     kernel = np.asarray(params["params"]["synergy_decoder"]["synergies"]["kernel"])
-    model = hand_model()
-    actuators = [model.actuator(i).name for i in range(model.nu)]
-    plot_matrix(kernel, actuators, paths[1], f"{title} synergy matrix W (a = W z + c)".strip())
+    plot_matrix(kernel, actuator_names(hand_model()), paths[1], f"{title} synergy matrix W (a = W z + c)".strip())
   return paths
