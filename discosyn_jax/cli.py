@@ -154,7 +154,9 @@ def cmd_render(args) -> None:
   videos.task_index(trainer.config, args.task)  # a bad task fails before any rollout
   out = pathlib.Path(args.out) if args.out else run / "videos" / f"{args.task}.mp4"
   written = videos.render_policy(trainer, state, args.task, out, episodes=args.episodes,
-                                 seed=args.seed, frame=args.frame, force=args.force)
+                                 seed=args.seed, frame=args.frame, force=args.force,
+                                 height=args.height, width=args.width,
+                                 cameras=tuple(args.camera or ("front", "oblique")))
   for steps, ret, success in zip(written["steps"], written["return"], written["success"]):
     print(f"episode: {steps} steps, return {ret:.2f}, success {success:.0f}")
   print(f"{written['path']} ({written['frames']} frames)")
@@ -206,6 +208,10 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("--frame", type=int, help="write only this control step of the first episode "
                  "as a PNG")
   p.add_argument("--seed", type=int, default=0, help="draws the episodes' initial states")
+  p.add_argument("--camera", action="append", choices=["front", "oblique"],
+                 help="a view, side by side when repeated (default: front and oblique)")
+  p.add_argument("--height", type=int, default=360, help="pixels per view (at most 480)")
+  p.add_argument("--width", type=int, default=480, help="pixels per view (at most 640)")
   p.add_argument("--force", action="store_true", help="replace the file if it exists")
   p.set_defaults(fn=cmd_render)
 

@@ -81,6 +81,8 @@ def render_policy(trainer, state, task: str, out: pathlib.Path, *, episodes: int
   wanted = (".png",) if frame is not None else FORMATS
   if out.suffix.lower() not in wanted:
     raise ValueError(f"{out}: the output must end in {' or '.join(wanted)}")
+  if height < 1 or width < 1:
+    raise ValueError(f"the picture size must be positive, not {height} x {width}")
   env = trainer.envs[task_index(trainer.config, task)]
   render.check_new([out], force)
   datas, ret, success = episode_states(trainer, state, task, episodes, seed)
