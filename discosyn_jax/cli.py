@@ -134,14 +134,21 @@ def cmd_eval(args) -> None:
   print(loop.format_table(results, int(jax.device_get(state.step)), trainer.config))
 
 
+def _derived_name(path, run_dir: pathlib.Path, name: str, step: int) -> str:
+  """`name` for the pictures of a run's latest state, `name-step<N>` for one checkpoint's."""
+  return name if pathlib.Path(path).resolve() == run_dir.resolve() else f"{name}-step{step}"
+
+
 def cmd_synergies(args) -> None:
   from discosyn_jax import loop, synergy_pictures
 
-  run = pathlib.Path(args.run)
-  trainer, state = loop.load_trained(run, backend="native")  # physics on the host: pictures only
-  out = pathlib.Path(args.out) if args.out else run / "synergies"
+  run_dir = loop.find_run_dir(args.run)
+  trainer, state = loop.load_trained(args.run, backend="native")  # host physics: pictures only
+  step = int(state.step)
+  default = run_dir / _derived_name(args.run, run_dir, "synergies", step)
+  out = pathlib.Path(args.out) if args.out else default
   paths = synergy_pictures.write(trainer, state.params, out, k=args.k, force=args.force,
-                                 title=f"{run.name} step {int(state.step)}:")
+                                 title=f"{run_dir.resolve().name} step {step}:")
   for path in paths:
     print(path)
 
@@ -149,10 +156,12 @@ def cmd_synergies(args) -> None:
 def cmd_render(args) -> None:
   from discosyn_jax import loop, videos
 
-  run = pathlib.Path(args.run)
-  trainer, state = loop.load_trained(run, backend="native")
+  run_dir = loop.find_run_dir(args.run)
+  trainer, state = loop.load_trained(args.run, backend="native")
   videos.task_index(trainer.config, args.task)  # a bad task fails before any rollout
-  out = pathlib.Path(args.out) if args.out else run / "videos" / f"{args.task}.mp4"
+  name = _derived_name(args.run, run_dir, args.task, int(state.step))
+  suffix = ".mp4" if args.frame is None else f"-frame{args.frame}.png"
+  out = pathlib.Path(args.out) if args.out else run_dir / "videos" / f"{name}{suffix}"
   written = videos.render_policy(trainer, state, args.task, out, episodes=args.episodes,
                                  seed=args.seed, frame=args.frame, force=args.force,
                                  height=args.height, width=args.width,
@@ -202,8 +211,8 @@ def build_parser() -> argparse.ArgumentParser:
                      "task (needs EGL or OSMesa)")
   p.add_argument("run", help="a run directory or a checkpoint folder in one")
   p.add_argument("--task", required=True, help="one of the run's tasks")
-  p.add_argument("--out", help="an .mp4 or .gif file (default: RUN/videos/TASK.mp4); a .png "
-                 "with --frame")
+  p.add_argument("--out", help="an .mp4 or .gif file, a .png with --frame (default: "
+                 "RUN/videos/TASK.mp4, TASK-frameN.png)")
   p.add_argument("--episodes", type=int, default=1, help="episodes, one after another")
   p.add_argument("--frame", type=int, help="write only this control step of the first episode "
                  "as a PNG")

@@ -59,14 +59,19 @@ def prepare_run_dir(run_dir: pathlib.Path, config: TrainConfig, resume: bool, fo
   return config
 
 
-def load_run(path: pathlib.Path) -> tuple[TrainConfig, pathlib.Path]:
-  """(config, checkpoint) of a run directory (its latest checkpoint) or a checkpoint folder."""
+def find_run_dir(path: pathlib.Path) -> pathlib.Path:
+  """The run directory that is or holds `path` (a checkpoint folder in it)."""
   path = pathlib.Path(path)
   for run_dir in (path, *path.parents):
     if (run_dir / CONFIG_FILE).is_file():
-      break
-  else:
-    raise ValueError(f"{path} is not a run directory or a checkpoint in one")
+      return run_dir
+  raise ValueError(f"{path} is not a run directory or a checkpoint in one")
+
+
+def load_run(path: pathlib.Path) -> tuple[TrainConfig, pathlib.Path]:
+  """(config, checkpoint) of a run directory (its latest checkpoint) or a checkpoint folder."""
+  path = pathlib.Path(path)
+  run_dir = find_run_dir(path)
   config = config_lib.load(run_dir / CONFIG_FILE)
   checkpoint = checkpoints.latest(run_dir) if path == run_dir else path
   if checkpoint is None:

@@ -125,8 +125,10 @@ def test_video_writer_writes_mp4_and_gif(tmp_path):
 
 def test_render_command_frame_and_bad_input(linear_run, tmp_path, capsys):
   run_dir, _, _ = linear_run
-  png = tmp_path / "frame.png"
-  assert cli.main(["render", str(run_dir), "--task", "valve1", "--frame", "30", "--out", str(png)]) == 0
+  # a checkpoint's pictures go beside the run's own, named by its step
+  assert cli.main(["render", str(run_dir / "final"), "--task", "valve1", "--frame", "30"]) == 0
+  png = run_dir / "videos" / "valve1-step0-frame30.png"
+  assert capsys.readouterr().out.splitlines()[-1] == f"{png} (1 frames)"
   image = Image.open(png)
   assert image.size == (960, 360)  # two cameras side by side
   assert_not_blank(image.convert("RGB"))
@@ -141,4 +143,4 @@ def test_render_command_frame_and_bad_input(linear_run, tmp_path, capsys):
     assert len(err) == 1 and message in err[0], err
   assert cli.main(["render", str(tmp_path), "--task", "valve1"]) == 2
   assert "not a run directory" in capsys.readouterr().err
-  assert not (run_dir / "videos").exists()
+  assert [p.name for p in (run_dir / "videos").iterdir()] == [png.name]
