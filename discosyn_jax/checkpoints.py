@@ -73,14 +73,30 @@ def latest(run_dir: pathlib.Path) -> pathlib.Path | None:
   return max(candidates)[2] if candidates else None
 
 
+def _item(path: pathlib.Path) -> pathlib.Path:
+  # a periodic checkpoint: CheckpointManager keeps its item in a subfolder
+  return path / _ITEM if (path / _ITEM).is_dir() else path
+
+
+def read_arrays(path: pathlib.Path, prefix: str) -> dict[str, "np.ndarray"]:
+  """The arrays of the checkpoint at `path` whose names start with `prefix` (names with the
+  prefix removed), without building the state they belong to: e.g. a run's decoder."""
+  import numpy as np
+
+  path = _item(pathlib.Path(path))
+  try:
+    saved = ocp.StandardCheckpointer().restore(path.resolve())
+  except (FileNotFoundError, ValueError, KeyError) as err:
+    raise ValueError(f"no readable checkpoint at {path} ({type(err).__name__})") from None
+  return {k[len(prefix):]: np.asarray(v) for k, v in saved.items() if k.startswith(prefix)}
+
+
 def restore(path: pathlib.Path, target):
   """The state saved at `path`, in the structure of `target` (a state of the same config).
 
   A checkpoint written for another config raises ValueError with one line saying so.
   """
-  path = pathlib.Path(path)
-  if (path / _ITEM).is_dir():  # a periodic checkpoint: CheckpointManager keeps its item in a subfolder
-    path = path / _ITEM
+  path = _item(pathlib.Path(path))
   checkpointer = ocp.StandardCheckpointer()
   try:
     saved = checkpointer.metadata(path.resolve()).item_metadata

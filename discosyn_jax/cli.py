@@ -1,4 +1,4 @@
-"""The `discosyn` command: train, eval, synergies, render, tasks, demo, render-scenes."""
+"""The `discosyn` command: train, eval, synergies, render, experiment, tasks, demo, render-scenes."""
 
 from __future__ import annotations
 
@@ -171,6 +171,17 @@ def cmd_render(args) -> None:
   print(f"{written['path']} ({written['frames']} frames)")
 
 
+def cmd_experiment(args) -> None:
+  from experiments import paper
+
+  out = pathlib.Path(args.out)
+  print(f"experiment {args.name} at scale {args.scale}, seeds {' '.join(map(str, args.seeds))}, "
+        f"in {out}")
+  start = time.perf_counter()
+  paper.run(args.name, out, args.scale, tuple(args.seeds), progress=args.progress)
+  print(f"experiment {args.name} finished in {(time.perf_counter() - start) / 60:.1f} min")
+
+
 def build_parser() -> argparse.ArgumentParser:
   parser = argparse.ArgumentParser(prog="discosyn", description=__doc__)
   sub = parser.add_subparsers(dest="command", required=True)
@@ -223,6 +234,16 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("--width", type=int, default=480, help="pixels per view (at most 640)")
   p.add_argument("--force", action="store_true", help="replace the file if it exists")
   p.set_defaults(fn=cmd_render)
+
+  p = sub.add_parser("experiment", help="run one of the paper's experiments, or all, at a scale "
+                     "(experiments/paper.py); finished steps are kept, unfinished ones resumed")
+  p.add_argument("name", help="discosyn-set1 | discosyn-set2 | baselines-set1 | baselines-set2 | "
+                 "transfer | sparse | all")
+  p.add_argument("--scale", default="cpu", help="ci (seconds per run) | cpu (minutes) | gpu")
+  p.add_argument("--seeds", type=int, nargs="+", default=[0])
+  p.add_argument("--out", default="runs/experiments", help="folder of the experiment's runs")
+  p.add_argument("--progress", action="store_true", help="a progress bar per run")
+  p.set_defaults(fn=cmd_experiment)
 
   p = sub.add_parser("demo", help="build task scenes, step them with random actions, print figures")
   p.add_argument("tasks", nargs="*", default=["set1"], help="tasks or task sets (default: set1)")

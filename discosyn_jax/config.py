@@ -26,6 +26,11 @@ class TrainConfig:
   decoder: str = "linear"  # linear (a b x 20 matrix) | mlp | identity (full-action PPO)
   decoder_bias: bool = True  # linear decoder: a = W z + c rather than W z
   freeze_decoder: bool = False  # decoder parameters outside the optimiser
+  # the initial decoder: a run directory (its latest checkpoint's decoder) or a synergy file
+  # written by discosyn_jax.synergies (PCA / autoencoder); "" starts from a random one
+  decoder_from: str = ""
+  # False: a = the decoder's mean during training too (the sequential baselines' fixed spaces)
+  decoder_noise: bool = True
   # the extended reward, paper Eq. 2: alpha1 H(pi(z|s,n)) + alpha2 log q(z|a) + alpha3 H(p(a|z))
   alpha1: float = 1e-3
   alpha2: float = 1e-2
@@ -78,6 +83,10 @@ class TrainConfig:
                          "noise: set alpha2 = alpha3 = 0")
     elif not 1 <= self.n_synergies <= 20:
       raise ValueError(f"the synergy count must be between 1 and 20, not {self.n_synergies}")
+    if self.decoder_from and self.decoder == "identity":
+      raise ValueError("the identity decoder (full-action PPO) cannot take a decoder_from")
+    if not self.decoder_noise and self.alpha3:
+      raise ValueError("a noiseless decoder (decoder_noise false) has no entropy: set alpha3 = 0")
     positive = ("num_envs", "unroll_length", "num_minibatches", "update_epochs", "steps",
                 "eval_envs", "keep_checkpoints")
     for name in positive:

@@ -8,7 +8,8 @@ the discriminator.
   q(z | a)     = N(m(a), sigma_psi)          the discriminator
 
 All standard deviations are learned and state-independent. The identity decoder (full-action
-PPO) has no parameters and no noise: a = z.
+PPO) has no parameters and no noise: a = z. With `decoder_noise` off the decoder acts with
+its mean during training too (the sequential baselines' fixed PCA / autoencoder spaces).
 
 The discriminator reads the action only, as in the paper's Eq. 1. The entropy bound
 H[pi(a|s,n)] >= H[pi(z|s,n)] + H[p(a|z)] + E log q(z|.) holds for any q; conditioning q on
@@ -85,6 +86,7 @@ class DiscoSyn(nn.Module):
   action_size: int = 20
   decoder: str = "linear"
   decoder_bias: bool = True
+  decoder_noise: bool = True
   policy_hidden: tuple[int, ...] = (128, 128)
   value_hidden: tuple[int, ...] = (128, 128)
   decoder_hidden: tuple[int, ...] = (128, 128)
@@ -119,10 +121,12 @@ class DiscoSyn(nn.Module):
     return self.values[task](obs)[..., 0]
 
   def decode(self, z):
-    """(mean, log_std) of p(a | z); log_std is None for the noiseless identity decoder."""
+    """(mean, log_std) of p(a | z); log_std is None for a noiseless decoder (identity, or
+    `decoder_noise` off)."""
     if self.decoder == "identity":
       return z, None
-    return self.synergy_decoder(z)
+    mean, log_std = self.synergy_decoder(z)
+    return mean, log_std if self.decoder_noise else None
 
   def discriminate(self, a):
     """(mean, log_std) of q(z | a)."""
@@ -145,7 +149,7 @@ def build(config, obs_sizes: Sequence[int], action_size: int) -> DiscoSyn:
   b = action_size if config.decoder == "identity" else config.n_synergies
   return DiscoSyn(
       obs_sizes=tuple(int(s) for s in obs_sizes), n_synergies=b, action_size=action_size,
-      decoder=config.decoder, decoder_bias=config.decoder_bias,
+      decoder=config.decoder, decoder_bias=config.decoder_bias, decoder_noise=config.decoder_noise,
       policy_hidden=tuple(config.policy_hidden), value_hidden=tuple(config.value_hidden),
       decoder_hidden=tuple(config.decoder_hidden),
       discriminator_hidden=tuple(config.discriminator_hidden),

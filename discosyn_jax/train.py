@@ -69,14 +69,19 @@ class Trainer:
     self.train_step = jax.jit(self._train_step, donate_argnums=0)
     self.evaluate = jax.jit(self._evaluate)
     # the evaluation's episodes of one task, with their states: `discosyn render`
-    self.episodes = jax.jit(self._episodes, static_argnames=("task", "n_envs", "keep_states"))
+    self.episodes = jax.jit(self._episodes, static_argnames=("task", "episodes", "keep_states"))
 
   # -- state -----------------------------------------------------------------
   def init(self, seed: int | None = None, decoder_params=None) -> TrainState:
-    """A fresh state; `decoder_params` replaces the initial decoder (e.g. a frozen one)."""
+    """A fresh state; `decoder_params` (or else the config's `decoder_from`) replaces the
+    initial decoder."""
     key = jax.random.PRNGKey(self.config.seed if seed is None else seed)
     key, init_key, *env_keys = jax.random.split(key, 2 + len(self.envs))
     params = self.model.init(init_key, [jnp.zeros((1, s)) for s in self.obs_sizes])
+    if decoder_params is None and self.config.decoder_from:
+      from discosyn_jax import synergies
+
+      decoder_params = synergies.load_decoder(self.config.decoder_from, self.config)
     if decoder_params is not None:
       params = _with_decoder(params, decoder_params)
     envs = tuple(env.reset(jax.random.split(k, self.config.num_envs))
@@ -197,39 +202,48 @@ class Trainer:
     return params, opt_state, jax.tree.map(jnp.mean, metrics)
 
   # -- evaluation -----------------------------------------------------------
-  def _episodes(self, params, normalizers, key, task: int, n_envs: int, keep_states: bool = False):
-    """`n_envs` deterministic episodes (head mean, decoder mean) of task `task`, no reset.
-
-    Returns (return, success) per env and, when `keep_states`, the env state after every
-    control step stacked along a leading time axis (for videos), else None.
-    """
+  def _episodes(self, params, normalizers, key, task: int, episodes: int, keep_states: bool = False):
+    """`episodes` deterministic episodes (head mean, decoder mean) of one task, in parallel:
+    per step z, action, reward and `alive` (1 until the episode's end, that step included),
+    and the env state after the step when `keep_states` (videos); per episode its return and
+    final success."""
     env = self._eval[task]
-    state = env.reset(jax.random.split(key, n_envs))
-    zeros = jnp.zeros(n_envs)
+    state = env.reset(jax.random.split(key, episodes))
+    zeros = jnp.zeros(episodes)
 
     def step(carry, _):
       state, alive, ret, success = carry
-      _, a, _ = self.act(params, task, self._normalize(state.obs, normalizers[task]))
+      z, a, _ = self.act(params, task, self._normalize(state.obs, normalizers[task]))
       state = env.step(state, a)
       ret = ret + alive * state.reward
       ended = alive * state.done
       success = jnp.where(ended > 0, state.metrics["success"], success)
-      return (state, alive * (1 - state.done), ret, success), (state if keep_states else None)
+      out = dict(z=z, action=a, reward=state.reward, alive=alive)
+      if keep_states:
+        out["state"] = state
+      return (state, alive * (1 - state.done), ret, success), out
 
-    (_, _, ret, success), states = jax.lax.scan(
+    (_, _, ret, success), traj = jax.lax.scan(
         step, (state, jnp.ones_like(zeros), zeros, zeros), None,
         length=self.envs[task].episode_length)
-    return ret, success, states
+    return traj, ret, success
 
   def _evaluate(self, params, normalizers, key):
-    """One deterministic episode per env and task:
-    {task: {"return", "success"}} averaged over `eval_envs` episodes."""
+    """{task: {"return", "success"}} of the deterministic policy, averaged over `eval_envs`
+    episodes per task."""
     out = {}
     for n, name in enumerate(self.config.tasks):
       key, sub = jax.random.split(key)
-      ret, success, _ = self._episodes(params, normalizers, sub, n, self.config.eval_envs)
+      _, ret, success = self._episodes(params, normalizers, sub, n, self.config.eval_envs)
       out[name] = {"return": ret.mean(), "success": success.mean()}
     return out
+
+  def rollouts(self, params, normalizers, key, episodes: int):
+    """{task: per-step arrays (steps, episodes, ...) of z, action, reward, alive} of the
+    deterministic policy: what the sequential baselines fit and the t-SNE shows."""
+    run = jax.jit(lambda p, nm, k: [self._episodes(p, nm, kk, n, episodes)[0] for n, kk in
+                                    enumerate(jax.random.split(k, len(self.envs)))])
+    return dict(zip(self.config.tasks, jax.device_get(run(params, normalizers, key))))
 
 
 def _episode_metrics(traj, log_q) -> dict[str, jax.Array]:
@@ -238,9 +252,13 @@ def _episode_metrics(traj, log_q) -> dict[str, jax.Array]:
   episodes = done.sum()
   per_episode = lambda x: (x * done).sum() / jnp.maximum(episodes, 1)
   m = traj["metrics"]
+  # the first control step of the rollout at which some env was paid anything (unroll_length
+  # if none): how long a sparse reward takes to be seen
+  paid = (traj["reward"] != 0).any(axis=1)
+  first_paid = jnp.where(paid.any(), jnp.argmax(paid), paid.shape[0])
   out = {"episodes": episodes, "return": per_episode(traj["episode_return"]),
          "success": per_episode(m["success"]), "diverged": m["diverged"].sum(),
-         "reward": traj["reward"].mean(), "log_q": log_q.mean()}
+         "reward": traj["reward"].mean(), "first_reward_t": first_paid, "log_q": log_q.mean()}
   out.update({k: v.mean() for k, v in m.items() if k.startswith("reward/")})
   return out
 

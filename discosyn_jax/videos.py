@@ -36,16 +36,16 @@ def episode_states(trainer, state, task: str, episodes: int, seed: int = 0
   if episodes < 1:
     raise ValueError(f"--episodes must be at least 1, not {episodes}")
   n = task_index(trainer.config, task)
-  ret, success, states = trainer.episodes(state.params, state.normalizers, jax.random.PRNGKey(seed),
-                                          task=n, n_envs=episodes, keep_states=True)
-  states = jax.device_get(states)
+  traj, ret, success = trainer.episodes(state.params, state.normalizers, jax.random.PRNGKey(seed),
+                                        task=n, episodes=episodes, keep_states=True)
+  traj = jax.device_get(traj)
+  states = traj["state"]
   env = trainer.envs[n]
-  done = np.asarray(states.done) > 0  # (T, episodes)
+  lengths = np.asarray(traj["alive"]).sum(axis=0).astype(int)  # steps up to each end, included
   out = []
   for e in range(episodes):
-    length = int(np.argmax(done[:, e])) + 1 if done[:, e].any() else done.shape[0]
     datas = []
-    for t in range(length):
+    for t in range(lengths[e]):
       at = jax.tree.map(lambda x: x[t, e], states)
       data = env.physics.to_mjdata(at.pipeline_state)
       env.task.show(env.mj_model, data, at.info)

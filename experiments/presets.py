@@ -1,7 +1,8 @@
 """Named training configs: `discosyn train --preset NAME`; flags replace single fields.
 
 Each preset is a TrainConfig (discosyn_jax/config.py), so a typo in a field name fails at
-import, not in the middle of a run.
+import, not in the middle of a run. The paper's runs (Tables I and II) are here by name,
+`<set>-disco<b>-<linear|mlp>` and `<set>-ppo`; experiments/paper.py runs them at a scale.
 """
 
 from __future__ import annotations
@@ -9,27 +10,30 @@ from __future__ import annotations
 from discosyn_jax.config import TrainConfig
 
 SET1 = ("valve0", "valve1", "valve2", "valve3")
+SET2 = ("dice", "valve3", "weight_pull", "screw")
+
+# the size of a run on a CPU: a run of set1-disco3-linear took 55 min for 10 M env steps on 2 cores
+CPU_RUN = dict(num_envs=128, unroll_length=20, num_minibatches=8, update_epochs=4, steps=2000,
+               eval_every=50, eval_envs=64, checkpoint_every=100)
+# full-action PPO: no discriminator, no decoder noise, a smaller initial std on 20 dims
+PPO = dict(decoder="identity", n_synergies=20, alpha2=0.0, alpha3=0.0, init_z_std=0.5)
 
 PRESETS: dict[str, TrainConfig] = {
     # CPU, a few minutes: the whole machinery on the four valves, far too short to solve them
     "quickstart": TrainConfig(tasks=SET1, n_synergies=3, decoder="linear", num_envs=16,
                               unroll_length=20, num_minibatches=4, update_epochs=2, steps=40,
                               eval_every=20, eval_envs=16, checkpoint_every=20),
-    # the paper's set #1 with 3 linear synergies (Table I, DiscoSyn3-L)
-    "set1-disco3-linear": TrainConfig(tasks=SET1, n_synergies=3, decoder="linear",
-                                      num_envs=128, unroll_length=20, num_minibatches=8,
-                                      update_epochs=4, steps=2000, eval_every=50,
-                                      eval_envs=64, checkpoint_every=100),
-    "set1-disco3-mlp": TrainConfig(tasks=SET1, n_synergies=3, decoder="mlp", num_envs=128,
-                                   unroll_length=20, num_minibatches=8, update_epochs=4,
-                                   steps=2000, eval_every=50, eval_envs=64,
-                                   checkpoint_every=100),
     # independent full-action PPO on one valve (the paper's first baseline stage)
-    "valve3-ppo": TrainConfig(tasks=("valve3",), decoder="identity", n_synergies=20, alpha2=0.0,
-                              alpha3=0.0, init_z_std=0.5, num_envs=128, unroll_length=20,
-                              num_minibatches=8, update_epochs=4, steps=2000, eval_every=50,
-                              eval_envs=64, checkpoint_every=100),
+    "valve3-ppo": TrainConfig(tasks=("valve3",), **PPO, **CPU_RUN),
 }
+# DiscoSyn<b>-L / -NL on the paper's sets (Table I: b = 3, 4; Table II: b = 4, 6), and the
+# independent full-action policies the sequential baselines start from
+for _set, _tasks, _sizes in (("set1", SET1, (3, 4)), ("set2", SET2, (4, 6))):
+  PRESETS[f"{_set}-ppo"] = TrainConfig(tasks=_tasks, **PPO, **CPU_RUN)
+  for _b in _sizes:
+    for _kind in ("linear", "mlp"):
+      PRESETS[f"{_set}-disco{_b}-{_kind}"] = TrainConfig(tasks=_tasks, n_synergies=_b,
+                                                        decoder=_kind, **CPU_RUN)
 
 
 def preset(name: str) -> TrainConfig:

@@ -1,0 +1,209 @@
+"""Synergy models outside DiscoSyn: the sequential baselines' PCA and autoencoder, fitted to
+the actions of trained policies, and the one way decoders are loaded into a run.
+
+A fitted model is written as a *synergy file* (.npz): the decoder's parameters, in exactly
+the layout of DiscoSyn's own decoder (linear: `synergies.kernel` (k, 20) and
+`synergies.bias`; mlp: networks.GaussianHead's), plus a JSON `meta` entry with the config
+fields the decoder needs (decoder, n_synergies, decoder_hidden) and its explained variance.
+A run directory works as a source too: its latest checkpoint's decoder.
+
+Both fitted decoders take z on a unit scale: PCA's components are scaled by the standard
+deviation along them, the autoencoder's latent code is standardised and the scaling is
+folded into the decoder's first layer. A policy head that starts with std 1 then explores
+about one data standard deviation along every synergy.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import pathlib
+import tempfile
+from typing import Any
+
+import flax.linen as nn
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+
+from discosyn_jax import networks
+
+ARCHITECTURE = ("decoder", "n_synergies", "decoder_bias", "decoder_hidden")
+_RUN_DECODER = "params.params.synergy_decoder."
+
+
+def applied_actions(rollouts: dict[str, dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+  """{task: (samples, action_size)}: the actions the envs applied (clipped to [-1, 1]) at
+  the steps of `Trainer.rollouts` where the episode was still running."""
+  out = {}
+  for name, traj in rollouts.items():
+    alive = np.asarray(traj["alive"]) > 0
+    out[name] = np.clip(np.asarray(traj["action"])[alive], -1.0, 1.0)
+  return out
+
+
+def explained_variance(actions: np.ndarray, reconstructed: np.ndarray) -> float:
+  """The fraction of the actions' total variance (about their mean) a reconstruction explains."""
+  total = np.sum((actions - actions.mean(axis=0)) ** 2)
+  return float(1.0 - np.sum((actions - reconstructed) ** 2) / total)
+
+
+def _residual_log_std(actions, reconstructed):
+  # what a Gaussian p(a|z) fitted to the data would have; unused by noiseless baselines
+  return np.log(np.maximum((actions - reconstructed).std(axis=0), 1e-3)).astype(np.float32)
+
+
+def fit_pca(actions: np.ndarray, k: int) -> tuple[dict, float]:
+  """A linear decoder a = mean + z (sqrt(var_i) v_i) from the top-k principal components,
+  and the fraction of variance they explain (the sum of their eigenvalue fractions)."""
+  from sklearn.decomposition import PCA
+
+  _check_k(k, actions)
+  pca = PCA(n_components=k).fit(actions)
+  kernel = (pca.components_ * np.sqrt(pca.explained_variance_)[:, None]).astype(np.float32)
+  bias = pca.mean_.astype(np.float32)
+  reconstructed = pca.inverse_transform(pca.transform(actions))
+  params = {"synergies": {"kernel": kernel, "bias": bias},
+            "log_std": _residual_log_std(actions, reconstructed)}
+  return params, float(np.sum(pca.explained_variance_ratio_))
+
+
+class Autoencoder(nn.Module):
+  """a -> z (k) -> a; the decoder half is the module DiscoSyn's mlp decoder uses."""
+  k: int
+  hidden: tuple[int, ...]
+  action_size: int
+
+  def setup(self):
+    self.encoder = networks.MLP(self.hidden, self.k)
+    self.decoder = networks.GaussianHead(self.hidden, self.action_size, 1.0, out_scale=1.0)
+
+  def encode(self, a):
+    return self.encoder(a)
+
+  def __call__(self, a):
+    return self.decoder(self.encoder(a))[0]
+
+
+def fit_autoencoder(actions: np.ndarray, k: int, hidden=(128, 128), steps: int = 3000,
+                    batch: int = 256, learning_rate: float = 1e-3, seed: int = 0) -> tuple[dict, float]:
+  """An MLP autoencoder with a k-dimensional code, trained by Adam on the reconstruction
+  error; its decoder (code standardised) and the fraction of variance it explains."""
+  _check_k(k, actions)
+  data = jnp.asarray(actions, jnp.float32)
+  model = Autoencoder(k, tuple(hidden), data.shape[1])
+  init_key, key = jax.random.split(jax.random.PRNGKey(seed))
+  params = model.init(init_key, data[:1])
+  optimizer = optax.adam(learning_rate)
+
+  def loss(p, x):
+    return jnp.mean((model.apply(p, x) - x) ** 2)
+
+  def step(carry, key):
+    p, opt = carry
+    x = data[jax.random.randint(key, (min(batch, data.shape[0]),), 0, data.shape[0])]
+    value, grads = jax.value_and_grad(loss)(p, x)
+    updates, opt = optimizer.update(grads, opt, p)
+    return (optax.apply_updates(p, updates), opt), value
+
+  train = jax.jit(lambda p, o, keys: jax.lax.scan(step, (p, o), keys))
+  (params, _), _ = train(params, optimizer.init(params), jax.random.split(key, steps))
+
+  code = np.asarray(model.apply(params, data, method=Autoencoder.encode))
+  mean, std = code.mean(axis=0), np.maximum(code.std(axis=0), 1e-6)
+  decoder = jax.tree.map(np.asarray, params["params"]["decoder"])
+  first = decoder["MLP_0"]["Dense_0"]
+  # decoder(mean + std * z): fold the standardisation into the first layer
+  first["bias"] = (first["bias"] + mean @ first["kernel"]).astype(np.float32)
+  first["kernel"] = (std[:, None] * first["kernel"]).astype(np.float32)
+  reconstructed = np.asarray(model.apply(params, data))
+  decoder["log_std"] = _residual_log_std(actions, reconstructed)
+  return decoder, explained_variance(actions, reconstructed)
+
+
+def decode(fields: dict[str, Any], params: dict, z: np.ndarray) -> np.ndarray:
+  """The decoder's mean at z, for a decoder described by `fields` (ARCHITECTURE)."""
+  from discosyn_jax.config import TrainConfig
+
+  config = TrainConfig(**{k: fields[k] for k in ARCHITECTURE})
+  action_size = int(np.shape(params["log_std"])[-1])
+  model = networks.build(config, obs_sizes=(1,), action_size=action_size)
+  return np.asarray(model.apply({"params": {"synergy_decoder": params}}, jnp.asarray(z),
+                                method=networks.DiscoSyn.decode)[0])
+
+
+def _check_k(k: int, actions: np.ndarray):
+  if not 1 <= k <= min(actions.shape):
+    raise ValueError(f"cannot fit {k} synergies to {actions.shape[0]} actions of size "
+                     f"{actions.shape[1]}")
+
+
+# -- synergy files -------------------------------------------------------------
+def save(path: pathlib.Path, params: dict, fields: dict[str, Any], **meta) -> pathlib.Path:
+  """Write a synergy file (atomically: a crash leaves no half-written file)."""
+  path = pathlib.Path(path)
+  path.parent.mkdir(parents=True, exist_ok=True)
+  flat = {".".join(str(getattr(k, "key", k)) for k in keys): np.asarray(leaf)
+          for keys, leaf in jax.tree_util.tree_flatten_with_path(params)[0]}
+  info = {**{k: fields[k] for k in ARCHITECTURE}, **meta}
+  fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz")
+  with os.fdopen(fd, "wb") as f:
+    np.savez(f, meta=np.array(json.dumps(info)), **flat)
+  os.replace(tmp, path)
+  return path
+
+
+def read(path: str | pathlib.Path) -> tuple[dict[str, Any], dict]:
+  """(meta with the decoder's config fields, decoder params) of a synergy file or a run."""
+  path = pathlib.Path(path)
+  if path.is_dir():
+    from discosyn_jax import checkpoints, loop
+
+    config, checkpoint = loop.load_run(path)
+    if config.decoder == "identity":
+      raise ValueError(f"{path} is a full-action run: it has no synergy decoder")
+    meta = {k: getattr(config, k) for k in ARCHITECTURE}
+    flat = checkpoints.read_arrays(checkpoint, _RUN_DECODER)
+  elif path.is_file():
+    try:
+      with np.load(path) as data:
+        meta = json.loads(str(data["meta"]))
+        flat = {k: data[k] for k in data.files if k != "meta"}
+    except (OSError, ValueError, KeyError) as err:
+      raise ValueError(f"{path} is not a synergy file ({type(err).__name__}: {err})") from None
+  else:
+    raise ValueError(f"decoder source {path} does not exist")
+  meta["decoder_hidden"] = tuple(meta["decoder_hidden"])
+  params: dict = {}
+  for name, value in flat.items():
+    node = params
+    *parents, leaf = name.split(".")
+    for part in parents:
+      node = node.setdefault(part, {})
+    node[leaf] = np.asarray(value, np.float32)
+  return meta, params
+
+
+def load_decoder(path, config) -> dict:
+  """The decoder params of `path` for a run of `config`; ValueError in one line when the
+  decoder is not the one the config describes."""
+  meta, params = read(path)
+  for name in ARCHITECTURE:
+    if name == "decoder_hidden" and meta["decoder"] != "mlp":
+      continue
+    if name == "decoder_bias" and meta["decoder"] != "linear":
+      continue
+    if meta[name] != getattr(config, name):
+      raise ValueError(f"the decoder in {path} has {name} = {meta[name]!r}, the config asks for "
+                       f"{getattr(config, name)!r}")
+  return params
+
+
+def describe(meta: dict[str, Any]) -> str:
+  """'PCA4', 'AE6', 'DiscoSyn3-L': the paper's names for a decoder."""
+  kind = meta.get("method")
+  if kind:
+    return f"{kind}{meta['n_synergies']}"
+  return f"DiscoSyn{meta['n_synergies']}-{'L' if meta['decoder'] == 'linear' else 'NL'}"
+

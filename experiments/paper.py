@@ -1,0 +1,240 @@
+"""The paper's experiments as plans of steps, each at a scale: `discosyn experiment NAME`.
+
+  discosyn-set1 / -set2  DiscoSyn<b>-L and -NL (Tables I and II)
+  baselines-set1 / -set2 the sequential baseline: independent full-action PPO per task (one
+                         run, one head and one value net per task, no shared parameters),
+                         its deterministic actions collected, PCA and an autoencoder fitted
+                         for k = 3, 4, 6, then policies trained in the frozen PCA4, AE4, PCA6,
+                         AE6 spaces (a = the decoder's mean, no noise outside the space)
+  transfer               unseen tasks with a frozen DiscoSyn decoder (set #1's DiscoSyn3-L
+                         for the two valves, set #2's DiscoSyn6-L for the top-down screw),
+                         beside full-action PPO from scratch on the same tasks and budget
+  sparse                 the sparse goal valve, frozen set-#1 synergies vs full-action PPO
+  all                    every one of them
+
+Every step writes into its own folder of OUT (`<method>-<set>-seed<n>`). A step whose folder
+holds a finished run of the same config is kept; an unfinished one is resumed, so an
+interrupted `all` is continued by running it again. Each run folder gets an
+`experiment.json` (experiment, method, set, seed, scale) that `discosyn report` reads.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import pathlib
+from typing import Any, Callable
+
+import jax
+import numpy as np
+
+from discosyn_jax import config as config_lib
+from discosyn_jax import loop, synergies
+from discosyn_jax.config import TrainConfig
+from experiments import presets
+
+TASK_SETS = {"set1": presets.SET1, "set2": presets.SET2,
+             "unseen-set1": ("valve_cylinder", "valve_cw"), "unseen-set2": ("screw_topdown",),
+             "sparse": ("valve_goal",)}
+DISCOSYN_SIZES = {"set1": (3, 4), "set2": (4, 6)}
+BASELINES = (("PCA", 4), ("AE", 4), ("PCA", 6), ("AE", 6))  # trained in, as in the paper
+FITTED_SIZES = (3, 4, 6)  # explained variance reported for these
+TRANSFER_FROM = {"unseen-set1": ("set1", 3, "linear"), "unseen-set2": ("set2", 6, "linear"),
+                 "sparse": ("set1", 3, "linear")}
+# a frozen space: no discriminator bonus, no decoder entropy (both would be constants)
+FROZEN = dict(freeze_decoder=True, alpha2=0.0, alpha3=0.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class Scale:
+  train: dict[str, Any]  # TrainConfig fields
+  collect_episodes: int  # deterministic episodes per task behind PCA / autoencoder
+  autoencoder_steps: int
+
+
+SCALES = {
+    # seconds per run: the pipeline's plumbing, nothing learned
+    "ci": Scale(dict(num_envs=4, unroll_length=5, num_minibatches=2, update_epochs=1, steps=2,
+                     eval_every=1, eval_envs=2, checkpoint_every=0), 2, 50),
+    # minutes per run on a 2-core CPU: 512 k env steps for a four-task run
+    "cpu": Scale(dict(num_envs=64, unroll_length=20, num_minibatches=4, update_epochs=4,
+                      steps=100, eval_every=25, eval_envs=32, checkpoint_every=50), 32, 3000),
+    # one GPU: 2048 envs per task, 98 M env steps for a four-task run
+    "gpu": Scale(dict(num_envs=2048, unroll_length=20, num_minibatches=16, update_epochs=4,
+                      steps=600, eval_every=25, eval_envs=256, checkpoint_every=100), 256, 20000),
+}
+
+
+# -- steps ---------------------------------------------------------------------
+@dataclasses.dataclass
+class Train:
+  name: str  # the run's folder in OUT
+  config: TrainConfig
+  meta: dict[str, Any]
+
+  def done(self, out: pathlib.Path) -> bool:
+    saved = out / self.name / loop.CONFIG_FILE
+    return ((out / self.name / "final").is_dir() and saved.is_file()
+            and config_lib.load(saved) == self.config)
+
+  def run(self, out: pathlib.Path, make_trainer, progress: bool, log) -> None:
+    run_dir = out / self.name
+    resume = (run_dir / loop.CONFIG_FILE).is_file()
+    loop.train(self.config, run_dir, resume=resume, progress=progress,
+               trainer=make_trainer(self.config), log=log)
+    (run_dir / "experiment.json").write_text(json.dumps(self.meta, indent=1))
+
+
+@dataclasses.dataclass
+class Fit:
+  """Collect a full-action run's deterministic actions; fit PCA and autoencoders to them."""
+  name: str  # the folder of synergy files in OUT
+  source: str  # the full-action run's folder in OUT
+  episodes: int
+  autoencoder_steps: int
+  hidden: tuple[int, ...]
+  meta: dict[str, Any]
+
+  def done(self, out: pathlib.Path) -> bool:
+    return (out / self.name / "explained_variance.json").is_file()
+
+  def run(self, out: pathlib.Path, make_trainer, progress: bool, log) -> None:
+    config, checkpoint = loop.load_run(out / self.source)
+    trainer = make_trainer(config)
+    state = loop.restore(trainer, checkpoint)
+    key = jax.random.PRNGKey(config.seed + 2)
+    rollouts = trainer.rollouts(state.params, state.normalizers, key, self.episodes)
+    per_task = synergies.applied_actions(rollouts)
+    actions = np.concatenate(list(per_task.values()))
+    folder = out / self.name
+    folder.mkdir(parents=True, exist_ok=True)
+    np.savez(folder / "actions.npz", **per_task)
+    variance: dict[str, Any] = {**self.meta, "samples": int(actions.shape[0]), "PCA": {}, "AE": {}}
+    for k in FITTED_SIZES:
+      if k > min(actions.shape):
+        log(f"{self.name}: {actions.shape[0]} actions are too few for {k} synergies; skipped")
+        continue
+      for method, fit, decoder in (
+          ("PCA", lambda: synergies.fit_pca(actions, k), "linear"),
+          ("AE", lambda: synergies.fit_autoencoder(actions, k, self.hidden,
+                                                   steps=self.autoencoder_steps, seed=config.seed), "mlp")):
+        params, ev = fit()
+        fields = dict(decoder=decoder, n_synergies=k, decoder_bias=True, decoder_hidden=self.hidden)
+        synergies.save(folder / f"{method.lower()}{k}.npz", params, fields, method=method,
+                       explained_variance=ev, source=self.source)
+        variance[method][str(k)] = ev
+        log(f"{self.name}: {method}{k} explains {ev:.1%} of the action variance")
+    # written last: its presence marks the step done
+    (folder / "explained_variance.json").write_text(json.dumps(variance, indent=1))
+
+
+# -- plans ---------------------------------------------------------------------
+def _meta(experiment, method, task_set, seed, scale):
+  return dict(experiment=experiment, method=method, set=task_set, seed=seed, scale=scale)
+
+
+class Planner:
+  """The steps of each experiment at one scale and seed, folders named in OUT."""
+
+  def __init__(self, out: pathlib.Path, scale: str, seed: int, task_sets=None):
+    if scale not in SCALES:
+      raise ValueError(f"unknown scale {scale!r}; scales: {', '.join(SCALES)}")
+    self.out, self.scale, self.seed = pathlib.Path(out), scale, seed
+    self.sets = {**TASK_SETS, **(task_sets or {})}
+    self.sizes = SCALES[scale]
+
+  def _config(self, base: TrainConfig, tasks, **changes) -> TrainConfig:
+    return base.replace(tasks=tuple(tasks), seed=self.seed, **self.sizes.train,
+                        **changes).validate()
+
+  def _folder(self, method: str, task_set: str) -> str:
+    return f"{method.lower()}-{task_set}-seed{self.seed}"
+
+  def discosyn(self, task_set: str, b: int, kind: str) -> Train:
+    method = f"DiscoSyn{b}-{'L' if kind == 'linear' else 'NL'}"
+    base = presets.preset(f"{task_set}-disco{b}-{kind}")
+    return Train(self._folder(method, task_set), self._config(base, self.sets[task_set]),
+                 _meta(f"discosyn-{task_set}", method, task_set, self.seed, self.scale))
+
+  def ppo(self, task_set: str, experiment: str) -> Train:
+    base = presets.preset("set1-ppo")  # the same PPO settings for every set
+    return Train(self._folder("PPO", task_set), self._config(base, self.sets[task_set]),
+                 _meta(experiment, "PPO", task_set, self.seed, self.scale))
+
+  def baselines(self, task_set: str) -> list:
+    experiment = f"baselines-{task_set}"
+    ppo = self.ppo(task_set, experiment)
+    hidden = ppo.config.decoder_hidden
+    fit = Fit(self._folder("synergies", task_set), ppo.name, self.sizes.collect_episodes,
+              self.sizes.autoencoder_steps, hidden, _meta(experiment, "fit", task_set, self.seed,
+                                                          self.scale))
+    steps = [ppo, fit]
+    for method, k in BASELINES:
+      source = (self.out / fit.name / f"{method.lower()}{k}.npz").resolve()
+      config = self._config(ppo.config, self.sets[task_set], decoder="linear" if method == "PCA" else "mlp",
+                            n_synergies=k, decoder_from=str(source), decoder_noise=False,
+                            init_z_std=1.0, **FROZEN)
+      steps.append(Train(self._folder(f"{method}{k}", task_set), config,
+                         _meta(experiment, f"{method}{k}", task_set, self.seed, self.scale)))
+    return steps
+
+  def frozen_synergies(self, task_set: str, experiment: str) -> list:
+    """The source DiscoSyn run, then a frozen-decoder run and a full-action run on `task_set`."""
+    source_set, b, kind = TRANSFER_FROM[task_set]
+    source = self.discosyn(source_set, b, kind)
+    base = presets.preset(f"{source_set}-disco{b}-{kind}")
+    # folders: transfer-synergies-set1-seed0 (unseen tasks of set #1), sparse-synergies-seed0
+    label = task_set.removeprefix("unseen-")
+    folder = lambda what: (f"{experiment}-{what}-seed{self.seed}" if label == experiment
+                           else self._folder(f"{experiment}-{what}", label))
+    frozen = Train(folder("synergies"),
+                   self._config(base, self.sets[task_set],
+                                decoder_from=str((self.out / source.name).resolve()), **FROZEN),
+                   _meta(experiment, f"{source.meta['method']} frozen", task_set, self.seed, self.scale))
+    scratch = self.ppo(task_set, experiment)
+    scratch = dataclasses.replace(scratch, name=folder("ppo"))
+    return [source, frozen, scratch]
+
+  def plan(self, experiment: str) -> list:
+    if experiment == "all":
+      steps = []
+      for name in ("discosyn-set1", "baselines-set1", "sparse", "transfer", "discosyn-set2",
+                   "baselines-set2"):
+        steps += [s for s in self.plan(name) if s.name not in {t.name for t in steps}]
+      return steps
+    if experiment.startswith("discosyn-") and experiment[9:] in DISCOSYN_SIZES:
+      task_set = experiment[9:]
+      return [self.discosyn(task_set, b, kind) for b in DISCOSYN_SIZES[task_set]
+              for kind in ("linear", "mlp")]
+    if experiment.startswith("baselines-") and experiment[10:] in DISCOSYN_SIZES:
+      return self.baselines(experiment[10:])
+    if experiment == "transfer":
+      return self.frozen_synergies("unseen-set1", "transfer") + \
+          self.frozen_synergies("unseen-set2", "transfer")
+    if experiment == "sparse":
+      return self.frozen_synergies("sparse", "sparse")
+    raise ValueError(f"unknown experiment {experiment!r}; experiments: {', '.join(EXPERIMENTS)}")
+
+
+EXPERIMENTS = ("discosyn-set1", "discosyn-set2", "baselines-set1", "baselines-set2", "transfer",
+               "sparse", "all")
+
+
+def run(experiment: str, out: pathlib.Path, scale: str, seeds=(0,), *,
+        make_trainer: Callable[[TrainConfig], Any] | None = None, task_sets=None,
+        progress: bool = False, log=print) -> list[pathlib.Path]:
+  """Run (or continue) one experiment for every seed; the folders of its steps."""
+  if make_trainer is None:
+    from discosyn_jax.train import Trainer as make_trainer
+  out = pathlib.Path(out)
+  plans = [Planner(out, scale, seed, task_sets).plan(experiment) for seed in seeds]
+  folders = []
+  for steps in plans:
+    for step in steps:
+      folders.append(out / step.name)
+      if step.done(out):
+        log(f"[{step.name}] done already; kept")
+        continue
+      log(f"[{step.name}] {type(step).__name__.lower()}")
+      step.run(out, make_trainer, progress, log)
+  return folders
