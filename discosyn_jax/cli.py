@@ -1,4 +1,4 @@
-"""The `discosyn` command: train, eval, tasks, demo, render-scenes."""
+"""The `discosyn` command: train, eval, synergies, render, experiment, tasks, demo, render-scenes."""
 
 from __future__ import annotations
 
@@ -134,17 +134,50 @@ def cmd_eval(args) -> None:
   import jax
 
   from discosyn_jax import loop
-  from discosyn_jax.train import Trainer
 
-  config, checkpoint = loop.load_run(pathlib.Path(args.run))
   changes = {"backend": args.backend} if args.backend else {}
   if args.episodes is not None:
     changes["eval_envs"] = args.episodes
-  config = config.replace(**changes).validate()
-  trainer = Trainer(config)
-  state = loop.restore(trainer, checkpoint)
+  trainer, state = loop.load_trained(args.run, **changes)
   results = loop.evaluate(trainer, state)
-  print(loop.format_table(results, int(jax.device_get(state.step)), config))
+  print(loop.format_table(results, int(jax.device_get(state.step)), trainer.config))
+
+
+def _derived_name(path, run_dir: pathlib.Path, name: str, step: int) -> str:
+  """`name` for the pictures of a run's latest state, `name-step<N>` for one checkpoint's."""
+  return name if pathlib.Path(path).resolve() == run_dir.resolve() else f"{name}-step{step}"
+
+
+def cmd_synergies(args) -> None:
+  from discosyn_jax import loop, synergy_pictures
+
+  run_dir = loop.find_run_dir(args.run)
+  trainer, state = loop.load_trained(args.run, backend="native")  # host physics: pictures only
+  step = int(state.step)
+  default = run_dir / _derived_name(args.run, run_dir, "synergies", step)
+  out = pathlib.Path(args.out) if args.out else default
+  paths = synergy_pictures.write(trainer, state.params, out, k=args.k, force=args.force,
+                                 title=f"{run_dir.resolve().name} step {step}:")
+  for path in paths:
+    print(path)
+
+
+def cmd_render(args) -> None:
+  from discosyn_jax import loop, videos
+
+  run_dir = loop.find_run_dir(args.run)
+  trainer, state = loop.load_trained(args.run, backend="native")
+  videos.task_index(trainer.config, args.task)  # a bad task fails before any rollout
+  name = _derived_name(args.run, run_dir, args.task, int(state.step))
+  suffix = ".mp4" if args.frame is None else f"-frame{args.frame}.png"
+  out = pathlib.Path(args.out) if args.out else run_dir / "videos" / f"{name}{suffix}"
+  written = videos.render_policy(trainer, state, args.task, out, episodes=args.episodes,
+                                 seed=args.seed, frame=args.frame, force=args.force,
+                                 height=args.height, width=args.width,
+                                 cameras=tuple(args.camera or ("front", "oblique")))
+  for steps, ret, success in zip(written["steps"], written["return"], written["success"]):
+    print(f"episode: {steps} steps, return {ret:.2f}, success {success:.0f}")
+  print(f"{written['path']} ({written['frames']} frames)")
 
 
 def cmd_experiment(args) -> None:
@@ -196,6 +229,31 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("--episodes", type=int, help="episodes per task (default: the run's eval_envs)")
   p.add_argument("--backend", choices=["auto", "native", "mjx"])
   p.set_defaults(fn=cmd_eval)
+
+  p = sub.add_parser("synergies", help="pictures of a run's synergies: the hand along each "
+                     "synergy, and the matrix of a linear decoder (needs EGL or OSMesa)")
+  p.add_argument("run", help="a run directory or a checkpoint folder in one")
+  p.add_argument("--out", help="folder for postures.png and matrix.png (default: RUN/synergies)")
+  p.add_argument("--k", type=float, default=1.0, help="the hand is shown at z = -k, 0, +k")
+  p.add_argument("--force", action="store_true", help="replace pictures already there")
+  p.set_defaults(fn=cmd_synergies)
+
+  p = sub.add_parser("render", help="a video (MP4 or GIF) of a run's deterministic policy on a "
+                     "task (needs EGL or OSMesa)")
+  p.add_argument("run", help="a run directory or a checkpoint folder in one")
+  p.add_argument("--task", required=True, help="one of the run's tasks")
+  p.add_argument("--out", help="an .mp4 or .gif file, a .png with --frame (default: "
+                 "RUN/videos/TASK.mp4, TASK-frameN.png)")
+  p.add_argument("--episodes", type=int, default=1, help="episodes, one after another")
+  p.add_argument("--frame", type=int, help="write only this control step of the first episode "
+                 "as a PNG")
+  p.add_argument("--seed", type=int, default=0, help="draws the episodes' initial states")
+  p.add_argument("--camera", action="append", choices=["front", "oblique"],
+                 help="a view, side by side when repeated (default: front and oblique)")
+  p.add_argument("--height", type=int, default=360, help="pixels per view (at most 480)")
+  p.add_argument("--width", type=int, default=480, help="pixels per view (at most 640)")
+  p.add_argument("--force", action="store_true", help="replace the file if it exists")
+  p.set_defaults(fn=cmd_render)
 
   p = sub.add_parser("experiment", help="run one of the paper's experiments, or all, at a scale "
                      "(experiments/paper.py); finished steps are kept, unfinished ones resumed")

@@ -1,8 +1,9 @@
 """The host loop: train steps, logs, evaluations and checkpoints, and nothing else.
 
 Everything numerical happens inside the jitted `Trainer.train_step`; between steps this
-loop writes one JSON line of metrics, evaluates the deterministic policy every
-`eval_every` steps, checkpoints every `checkpoint_every` steps and at the end.
+loop writes one JSON line of metrics (and TensorBoard scalars, logs.py), evaluates the deterministic policy every
+`eval_every` steps, checkpoints every `checkpoint_every` steps and at the end, where it
+also draws the training curves (plots.py).
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from typing import Any
 
 import jax
 
-from discosyn_jax import checkpoints
+from discosyn_jax import checkpoints, logs, plots
 from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.train import Trainer, TrainState
@@ -58,14 +59,19 @@ def prepare_run_dir(run_dir: pathlib.Path, config: TrainConfig, resume: bool, fo
   return config
 
 
-def load_run(path: pathlib.Path) -> tuple[TrainConfig, pathlib.Path]:
-  """(config, checkpoint) of a run directory (its latest checkpoint) or a checkpoint folder."""
+def find_run_dir(path: pathlib.Path) -> pathlib.Path:
+  """The run directory that is or holds `path` (a checkpoint folder in it)."""
   path = pathlib.Path(path)
   for run_dir in (path, *path.parents):
     if (run_dir / CONFIG_FILE).is_file():
-      break
-  else:
-    raise ValueError(f"{path} is not a run directory or a checkpoint in one")
+      return run_dir
+  raise ValueError(f"{path} is not a run directory or a checkpoint in one")
+
+
+def load_run(path: pathlib.Path) -> tuple[TrainConfig, pathlib.Path]:
+  """(config, checkpoint) of a run directory (its latest checkpoint) or a checkpoint folder."""
+  path = pathlib.Path(path)
+  run_dir = find_run_dir(path)
   config = config_lib.load(run_dir / CONFIG_FILE)
   checkpoint = checkpoints.latest(run_dir) if path == run_dir else path
   if checkpoint is None:
@@ -75,6 +81,15 @@ def load_run(path: pathlib.Path) -> tuple[TrainConfig, pathlib.Path]:
 
 def restore(trainer: Trainer, checkpoint: pathlib.Path) -> TrainState:
   return checkpoints.restore(checkpoint, trainer.init())
+
+
+def load_trained(path: pathlib.Path, make_trainer=Trainer, **changes) -> tuple[Trainer, TrainState]:
+  """The trainer and the restored state of a run (its latest checkpoint) or of a checkpoint;
+  `changes` replace config fields that do not change the state's layout (backend, eval_envs);
+  `make_trainer(config)` builds the trainer (tests give tiny envs)."""
+  config, checkpoint = load_run(pathlib.Path(path))
+  trainer = make_trainer(config.replace(**changes).validate())
+  return trainer, restore(trainer, checkpoint)
 
 
 def evaluate(trainer: Trainer, state: TrainState) -> dict[str, dict[str, float]]:
@@ -118,8 +133,8 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, f
   bar = _progress(progress, start_step, config.steps)
   shown = {}  # training success per task, as of the last rollout in which episodes ended
   last_good = checkpoints.latest(run_dir)
-  with open(run_dir / "metrics.jsonl", "a") as metrics_file, \
-       open(run_dir / "eval.jsonl", "a") as eval_file:
+  with open(run_dir / logs.METRICS_FILE, "a") as metrics_file, \
+       open(run_dir / logs.EVAL_FILE, "a") as eval_file, logs.TensorBoard(run_dir) as board:
     tick = time.perf_counter()
     while int(state.step) < config.steps:
       state, metrics = train_step(state)
@@ -135,6 +150,7 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, f
       tick = now
       metrics_file.write(json.dumps(metrics) + "\n")
       metrics_file.flush()
+      board.write(metrics, "train")
       if not metrics["finite"] or not math.isfinite(metrics["loss"]):
         where = f"the last good checkpoint is {last_good}" if last_good else "no checkpoint was written"
         raise TrainingDiverged(f"non-finite loss or parameters at step {step}; training stopped, "
@@ -144,23 +160,27 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, f
         shown.update({n: metrics[f"{n}/success"] for n in config.tasks if f"{n}/success" in metrics})
         bar.set_postfix_str(" ".join(f"{n}:{v:.0%}" for n, v in list(shown.items())[:6]))
       if config.eval_every and step % config.eval_every == 0 and step < config.steps:
-        _log_eval(eval_file, evaluate(trainer, state), step, config, now - start)
+        _log_eval((eval_file, board), evaluate(trainer, state), step, config, now - start)
       if config.checkpoint_every and step % config.checkpoint_every == 0:
         last_good = checkpoints.save(run_dir, state, config.keep_checkpoints)
     if bar is not None:
       bar.close()
     results = evaluate(trainer, state)
-    _log_eval(eval_file, results, int(state.step), config, time.perf_counter() - start)
+    _log_eval((eval_file, board), results, int(state.step), config, time.perf_counter() - start)
   checkpoints.save(run_dir, state, config.keep_checkpoints, final=True)
+  curves = plots.run_curves(run_dir, run_dir / plots.PLOTS_DIR)
+  log(f"training curves: {', '.join(str(p) for p in curves)}")
   log(format_table(results, int(state.step), config))
   return {"results": results, "state": state, "compile_s": compile_s}
 
 
-def _log_eval(file, results, step, config, wall_s):
+def _log_eval(outputs, results, step, config, wall_s):
+  file, board = outputs
   row = {"step": step, "env_steps": step * config.env_steps_per_train_step, "wall_s": wall_s}
   row.update({f"{n}/{k}": v for n, r in results.items() for k, v in r.items()})
   file.write(json.dumps(row) + "\n")
   file.flush()
+  board.write(row, "eval")
 
 
 def _progress(enabled: bool, start: int, total: int):

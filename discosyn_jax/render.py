@@ -1,26 +1,42 @@
 """Offscreen pictures of scenes with MuJoCo's renderer.
 
 Headless machines need an OpenGL library: set MUJOCO_GL=egl (Debian/Ubuntu packages
-libegl1 and libgl1-mesa-dri, software-rendered without a GPU) or MUJOCO_GL=osmesa
-(package libosmesa6). `discosyn render-scenes` picks egl when nothing is set.
+libegl1, libegl-mesa0 and libgl1-mesa-dri, software-rendered without a GPU) or MUJOCO_GL=osmesa
+(package libosmesa6). On Linux without a display, importing discosyn_jax sets egl when
+nothing is set (MuJoCo reads the variable when it is imported).
 """
 
 from __future__ import annotations
 
-import os
+import pathlib
+from typing import Iterable, Iterator
 
 import mujoco
 import numpy as np
-
-os.environ.setdefault("MUJOCO_GL", "egl")
 
 
 def frames(model: mujoco.MjModel, data: mujoco.MjData, cameras=("front", "oblique"),
            height: int = 360, width: int = 480) -> np.ndarray:
   """The views of `cameras`, side by side, as one (height, width * n, 3) uint8 image."""
+  return next(many_frames(model, [data], cameras, height, width))
+
+
+def many_frames(model: mujoco.MjModel, datas: Iterable[mujoco.MjData], cameras=("front", "oblique"),
+                height: int = 360, width: int = 480) -> Iterator[np.ndarray]:
+  """`frames` of each state in `datas`, through one renderer (one GL context for a whole video)."""
   with mujoco.Renderer(model, height, width) as renderer:
-    views = []
-    for camera in cameras:
-      renderer.update_scene(data, camera=camera)
-      views.append(renderer.render())
-  return np.concatenate(views, axis=1)
+    for data in datas:
+      views = []
+      for camera in cameras:
+        renderer.update_scene(data, camera=camera)
+        views.append(renderer.render())
+      yield np.concatenate(views, axis=1)
+
+
+def check_new(paths, force: bool) -> None:
+  """Refuse to overwrite pictures or videos already there, unless `force`."""
+  if force:
+    return
+  for path in paths:
+    if pathlib.Path(path).exists():
+      raise ValueError(f"{path} already exists; pass --force to replace it")

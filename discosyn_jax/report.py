@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from discosyn_jax import config as config_lib
+from discosyn_jax import logs
 from discosyn_jax.config import TrainConfig
 
 # The paper's Tables I and II (1 = solved, columns in these tasks' order) and its PCA
@@ -43,11 +44,9 @@ METHOD_ORDER = ("PPO", "PCA4", "AE4", "PCA6", "AE6", "DiscoSyn3-L", "DiscoSyn3-N
 MAIN_EXPERIMENTS = ("discosyn", "baselines")
 
 
-def read_jsonl(path: pathlib.Path) -> list[dict[str, Any]]:
-  path = pathlib.Path(path)
-  if not path.is_file():
-    return []
-  return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+def _rows(path: pathlib.Path) -> list[dict[str, Any]]:
+  """A log's rows; none yet for a run that has not written it."""
+  return logs.read_jsonl(path) if pathlib.Path(path).is_file() else []
 
 
 @dataclasses.dataclass
@@ -97,7 +96,7 @@ def load_run(path: pathlib.Path) -> Run:
   meta = json.loads(meta_file.read_text()) if meta_file.is_file() else {}
   return Run(path=path, config=config, experiment=meta.get("experiment", "train"),
              method=meta.get("method", _method_of(config)), task_set=meta.get("set", _set_of(config)),
-             seed=meta.get("seed", config.seed), evals=read_jsonl(path / "eval.jsonl"),
+             seed=meta.get("seed", config.seed), evals=_rows(path / logs.EVAL_FILE),
              finished=(path / "final").is_dir())
 
 
@@ -197,7 +196,7 @@ def first_reward(run: Run, task: str) -> tuple[int, int] | None:
   """(env steps of the task, control steps of each env) until the first non-zero reward of
   `task` in training, or None when none was seen (or the run did not log it)."""
   cfg = run.config
-  for row in read_jsonl(run.path / "metrics.jsonl"):
+  for row in _rows(run.path / logs.METRICS_FILE):
     t = row.get(f"{task}/first_reward_t")
     if t is not None and t < cfg.unroll_length:
       before = row["step"] - 1  # train steps before the one that saw it
@@ -257,9 +256,7 @@ def tsne(run: Run, path: pathlib.Path, episodes: int = 8, points: int = 2000,
   from discosyn_jax import loop
   from discosyn_jax.train import Trainer
 
-  config, checkpoint = loop.load_run(run.path)
-  trainer = (make_trainer or Trainer)(config)
-  state = loop.restore(trainer, checkpoint)
+  trainer, state = loop.load_trained(run.path, make_trainer or Trainer)
   rollouts = trainer.rollouts(state.params, state.normalizers, jax.random.PRNGKey(0), episodes)
   rng = np.random.default_rng(0)
   zs, labels = [], []

@@ -68,6 +68,8 @@ class Trainer:
     self._eval = [wrappers.for_evaluation(env) for env in self.envs]
     self.train_step = jax.jit(self._train_step, donate_argnums=0)
     self.evaluate = jax.jit(self._evaluate)
+    # the evaluation's episodes of one task, with their states: `discosyn render`
+    self.episodes = jax.jit(self._episodes, static_argnames=("task", "episodes", "keep_states"))
 
   # -- state -----------------------------------------------------------------
   def init(self, seed: int | None = None, decoder_params=None) -> TrainState:
@@ -200,10 +202,11 @@ class Trainer:
     return params, opt_state, jax.tree.map(jnp.mean, metrics)
 
   # -- evaluation -----------------------------------------------------------
-  def _episodes(self, params, normalizers, key, task: int, episodes: int):
+  def _episodes(self, params, normalizers, key, task: int, episodes: int, keep_states: bool = False):
     """`episodes` deterministic episodes (head mean, decoder mean) of one task, in parallel:
     per step z, action, reward and `alive` (1 until the episode's end, that step included),
-    and per episode its return and final success."""
+    and the env state after the step when `keep_states` (videos); per episode its return and
+    final success."""
     env = self._eval[task]
     state = env.reset(jax.random.split(key, episodes))
     zeros = jnp.zeros(episodes)
@@ -216,6 +219,8 @@ class Trainer:
       ended = alive * state.done
       success = jnp.where(ended > 0, state.metrics["success"], success)
       out = dict(z=z, action=a, reward=state.reward, alive=alive)
+      if keep_states:
+        out["state"] = state
       return (state, alive * (1 - state.done), ret, success), out
 
     (_, _, ret, success), traj = jax.lax.scan(
@@ -236,9 +241,10 @@ class Trainer:
   def rollouts(self, params, normalizers, key, episodes: int):
     """{task: per-step arrays (steps, episodes, ...) of z, action, reward, alive} of the
     deterministic policy: what the sequential baselines fit and the t-SNE shows."""
-    run = jax.jit(lambda p, nm, k: [self._episodes(p, nm, kk, n, episodes)[0] for n, kk in
-                                    enumerate(jax.random.split(k, len(self.envs)))])
-    return dict(zip(self.config.tasks, jax.device_get(run(params, normalizers, key))))
+    keys = jax.random.split(key, len(self.envs))
+    return {name: jax.device_get(self.episodes(params, normalizers, keys[n], task=n,
+                                               episodes=episodes)[0])
+            for n, name in enumerate(self.config.tasks)}
 
 
 def _episode_metrics(traj, log_q) -> dict[str, jax.Array]:

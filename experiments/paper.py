@@ -97,9 +97,8 @@ class Fit:
     return (out / self.name / "explained_variance.json").is_file()
 
   def run(self, out: pathlib.Path, make_trainer, progress: bool, log) -> None:
-    config, checkpoint = loop.load_run(out / self.source)
-    trainer = make_trainer(config)
-    state = loop.restore(trainer, checkpoint)
+    trainer, state = loop.load_trained(out / self.source, make_trainer)
+    config = trainer.config
     key = jax.random.PRNGKey(config.seed + 2)
     rollouts = trainer.rollouts(state.params, state.normalizers, key, self.episodes)
     per_task = synergies.applied_actions(rollouts)

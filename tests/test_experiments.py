@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from sklearn.decomposition import PCA
 
-from discosyn_jax import checkpoints, cli, report, synergies
+from discosyn_jax import checkpoints, cli, logs, report, synergies
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.train import Trainer, _episode_metrics
 from experiments import paper
@@ -150,7 +150,7 @@ def test_sparse_and_transfer_keep_the_source_decoder(experiments):
                       scale="ci")
   scratch = json.loads((experiments / "sparse-ppo-seed0" / "config.json").read_text())
   assert scratch["decoder"] == "identity" and scratch["tasks"] == ["g"]
-  rows = report.read_jsonl(frozen / "metrics.jsonl")
+  rows = logs.read_jsonl(frozen / "metrics.jsonl")
   assert all("g/first_reward_t" in row for row in rows)
 
 

@@ -1,0 +1,93 @@
+"""A run's logs: JSONL read back, TensorBoard event files, training-curve PNGs."""
+
+import json
+import struct
+
+import numpy as np
+import pytest
+from PIL import Image
+from tensorboardX.proto import event_pb2
+
+from discosyn_jax import logs, loop, plots
+from discosyn_jax.config import TrainConfig
+from discosyn_jax.train import Trainer
+from tests.toy_env import ReachAction
+
+TOY = TrainConfig(tasks=("reach_a", "reach_b"), n_synergies=2, policy_hidden=(8,), value_hidden=(8,),
+                  discriminator_hidden=(8,), num_envs=4, unroll_length=5, num_minibatches=2,
+                  update_epochs=1, steps=4, eval_every=2, eval_envs=2, checkpoint_every=0)
+
+
+@pytest.fixture(scope="module")
+def toy_run(tmp_path_factory):
+  """Four train steps on two toy tasks (episodes of 5 steps end in every rollout)."""
+  run_dir = tmp_path_factory.mktemp("runs") / "toy"
+  trainer = Trainer(TOY, envs=[ReachAction(0.3, episode_length=5), ReachAction(-0.3, episode_length=5)])
+  loop.train(TOY, run_dir, trainer=trainer, progress=False, log=lambda *_: None)
+  return run_dir
+
+
+def tensorboard_scalars(folder) -> dict[str, list[tuple[int, float]]]:
+  """{tag: [(step, value)]} of the event files in `folder` (TFRecord: length, crc, data, crc)."""
+  out = {}
+  for path in sorted(folder.glob("events.out.tfevents.*")):
+    blob = path.read_bytes()
+    at = 0
+    while at < len(blob):
+      (length,) = struct.unpack("<Q", blob[at:at + 8])
+      event = event_pb2.Event.FromString(blob[at + 12:at + 12 + length])
+      at += 12 + length + 4
+      for value in event.summary.value:
+        out.setdefault(value.tag, []).append((event.step, value.simple_value))
+  return out
+
+
+def test_read_jsonl_keeps_rows_and_drops_only_a_cut_last_line(tmp_path):
+  path = tmp_path / "m.jsonl"
+  path.write_text('{"step": 1, "loss": 0.5}\n{"step": 2, "loss": 0.25}\n{"step": 3, "lo')
+  assert logs.read_jsonl(path) == [{"step": 1, "loss": 0.5}, {"step": 2, "loss": 0.25}]
+  path.write_text('{"step": 1}\nnot json\n{"step": 3}\n')
+  with pytest.raises(ValueError, match="line 2"):
+    logs.read_jsonl(path)
+  path.write_text('[1, 2]\n')
+  with pytest.raises(ValueError, match="not a JSON object"):
+    logs.read_jsonl(path)
+  with pytest.raises(ValueError, match="does not exist"):
+    logs.read_jsonl(tmp_path / "missing.jsonl")
+
+
+def test_tensorboard_holds_the_jsonl_numbers_over_env_steps(toy_run):
+  metrics = logs.read_jsonl(toy_run / logs.METRICS_FILE)
+  evals = logs.read_jsonl(toy_run / logs.EVAL_FILE)
+  assert [r["step"] for r in metrics] == [1, 2, 3, 4] and [r["step"] for r in evals] == [2, 4]
+  scalars = tensorboard_scalars(toy_run / logs.TENSORBOARD_DIR)
+  per_step = 2 * 4 * 5  # tasks x envs x unroll
+  assert scalars["train/loss"] == [(r["env_steps"], pytest.approx(r["loss"])) for r in metrics]
+  assert [s for s, _ in scalars["train/loss"]] == [per_step * k for k in (1, 2, 3, 4)]
+  assert scalars["reach_b/return"] == [(r["env_steps"], pytest.approx(r["reach_b/return"]))
+                                       for r in metrics]
+  assert scalars["eval/reach_a/success"] == [(r["env_steps"], pytest.approx(r["reach_a/success"]))
+                                             for r in evals]
+  assert "train/step" not in scalars and "train/wall_s" not in scalars
+
+
+def test_the_run_ends_with_curve_pngs_and_run_curves_redraws_them(toy_run, tmp_path):
+  drawn = sorted(p.name for p in (toy_run / plots.PLOTS_DIR).iterdir())
+  assert drawn == ["losses.png", "return.png", "success.png"]
+  paths = plots.run_curves(toy_run, tmp_path / "out")
+  assert [p.name for p in paths] == ["success.png", "return.png", "losses.png"]
+  for path in paths:
+    image = np.asarray(Image.open(path).convert("RGB"), dtype=float)
+    assert image.shape[0] > 200 and image.shape[1] > 400
+    # drawn lines: colours other than the white background and black text
+    coloured = (image.max(axis=-1) - image.min(axis=-1)) > 60
+    assert coloured.mean() > 0.001, path
+
+
+def test_curves_of_a_folder_without_a_run_or_without_steps_fail(tmp_path):
+  with pytest.raises(ValueError, match="holds no run"):
+    plots.run_curves(tmp_path, tmp_path / "out")
+  (tmp_path / "config.json").write_text(json.dumps(TOY.to_dict()))
+  with pytest.raises(ValueError, match="no training steps"):
+    plots.run_curves(tmp_path, tmp_path / "out")
+  assert not (tmp_path / "out").exists()
