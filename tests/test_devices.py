@@ -31,3 +31,4 @@ def test_this_process_has_one_device_and_bad_counts_are_refused():
   assert devices.make_mesh().size == 1
   with pytest.raises(ValueError, match="between 1 and 1"):
     devices.make_mesh(2)
+
