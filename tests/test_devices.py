@@ -21,8 +21,13 @@ def test_two_cpu_devices_give_the_one_device_results():
   assert out["toy_max_param_diff"] < 1e-4, out
   assert out["toy_losses"][0] == pytest.approx(out["toy_losses"][1], rel=1e-5)
   assert out["native_max_param_diff"] < 1e-4, out
-  # the native backend's host callback stepped 4 envs on one device, 2 per device on two
-  assert out["native_callback_batches"] == [[4], [2]]
+  one, two = out["native_eval"]  # evaluated after that step: every figure finite, alike
+  assert one.keys() == two.keys() == {"valve1"}
+  for key, value in one["valve1"].items():
+    assert two["valve1"][key] == pytest.approx(value, abs=0.05), out
+  # the native backend's host callback stepped the 4 training envs in one call on one
+  # device, 2 per call on two; the 3 evaluation envs are not split
+  assert out["native_callback_batches"] == [[3, 4], [2, 3]]
   assert out["odd_batch_error"] == "num_envs = 5 does not split over 2 devices"
 
 

@@ -4,7 +4,7 @@ on a mesh of 2 CPU devices against the same step on 1 device.
   XLA_FLAGS=--xla_force_host_platform_device_count=2 python -m tests.two_devices
 
 Prints one JSON line: the largest parameter difference after a few steps of the toy task,
-the same for one step on valve1 with the native backend, and the env batches the native
+the evaluation after one step on valve1 with the native backend, and the env batches the native
 host callback received on each layout.
 """
 
@@ -18,11 +18,14 @@ from discosyn_jax.train import Trainer
 from tests.test_trainer import two_task_trainer
 
 
-def params_after(trainer: Trainer, steps: int):
+def params_after(trainer: Trainer, steps: int, evaluate: bool = False):
   state = trainer.init()
   for _ in range(steps):
     state, metrics = trainer.train_step(state)
-  return jax.device_get(state.params), float(metrics["loss"])
+  results = None
+  if evaluate:  # not split: the callbacks of the evaluation run on one device
+    results = trainer.evaluate(state.params, state.normalizers, jax.random.PRNGKey(1))
+  return jax.device_get(state.params), float(metrics["loss"]), jax.device_get(results)
 
 
 def max_difference(a, b) -> float:
@@ -53,13 +56,15 @@ def main():
   out["toy_losses"] = [toy[0][1], toy[1][1]]
 
   config = TrainConfig(tasks=("valve1",), n_synergies=2, backend="native",
+                       eval_envs=3,
                        **{**small, "num_envs": 4, "unroll_length": 3, "update_epochs": 1})
   runs, batches = [], []
   for n in (1, 2):
     trainer = Trainer(config, devices=n)
     batches.append(native_batches(trainer))
-    runs.append(params_after(trainer, steps=1))
+    runs.append(params_after(trainer, steps=1, evaluate=True))
   out["native_max_param_diff"] = max_difference(runs[0][0], runs[1][0])
+  out["native_eval"] = [jax.tree.map(float, r[2]) for r in runs]
   out["native_callback_batches"] = [sorted(set(b)) for b in batches]
   try:
     Trainer(config.replace(num_envs=5, unroll_length=4), devices=2)
