@@ -14,6 +14,8 @@ For every backend and batch size (envs per task) it prints, in env (control) ste
              repeat times rollout, physics and training one after the other, so a change in
              the machine's load hits both sides of a ratio
   callback   native only: the share of train-step time spent inside the host callbacks
+  update     seconds of the PPO update alone (epochs x minibatches, jitted apart, on samples
+             of the step's shapes) and its share of a train step: the part outside physics
   compile    seconds to lower and compile the train step (and the physics step)
   peak mem   GiB: the process's peak resident memory so far (CPU), or the device's peak
              bytes in use (accelerators)
@@ -33,6 +35,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
+from discosyn_jax import ppo
 from discosyn_jax.train import Trainer
 
 
@@ -102,6 +105,22 @@ class CallbackClock:
     return run
 
 
+def update_runner(trainer: Trainer, state):
+  """The PPO update of a train step alone, on random samples of the step's shapes."""
+  n = trainer.config.num_envs * trainer.config.unroll_length
+  keys = iter(jax.random.split(jax.random.PRNGKey(0), 6 * len(trainer.obs_sizes)))
+  normal = lambda *shape: jax.random.normal(next(keys), (n, *shape))
+  samples = [ppo.Samples(obs=normal(size), z=normal(trainer.model.n_synergies),
+                         action=normal(trainer.action_size), log_prob=normal(),
+                         advantage=normal(), target=normal())
+             for size in trainer.obs_sizes]
+  # copies: the train step donates the state it is given
+  params, opt_state = jax.tree.map(lambda x: x.copy(), (state.params, state.opt_state))
+  args = (params, opt_state, samples, jax.random.PRNGKey(1))
+  compiled = jax.jit(trainer._update).lower(*args).compile()
+  return lambda: jax.block_until_ready(compiled(*args))
+
+
 def peak_memory_gib() -> float:
   device = jax.devices()[0]
   stats = device.memory_stats() if device.platform != "cpu" else None
@@ -137,11 +156,13 @@ def bench_row(config, args) -> dict:
     row["compile"] = time.perf_counter() - start
     state, metrics = train_step(state)  # warm-up
     jax.block_until_ready(metrics)
+    update = update_runner(trainer, state)
+    update()
   for fn in raw:
     fn()
   physics()
 
-  rollout_rates, physics_rates, train_rates, shares = [], [], [], []
+  rollout_rates, physics_rates, train_rates, shares, updates = [], [], [], [], []
   for _ in range(args.repeats):
     rollout_rates.append(total / sum(_seconds(fn) for fn in raw))
     physics_rates.append(total / _seconds(physics))
@@ -154,6 +175,7 @@ def bench_row(config, args) -> dict:
       seconds = time.perf_counter() - start
       train_rates.append(args.steps * config.env_steps_per_train_step / seconds)
       shares.append(clock.seconds / seconds)
+      updates.append(_seconds(update))
   for fn in raw:
     fn.close()
   row.update(rollout=statistics.median(rollout_rates), physics=statistics.median(physics_rates),
@@ -162,7 +184,10 @@ def bench_row(config, args) -> dict:
   if trainer:
     row.update(train=statistics.median(train_rates),
                train_ratio=_median_range([t / r for t, r in zip(train_rates, rollout_rates)]),
-               callback=statistics.median(shares) if row["backend"] == "native" else float("nan"))
+               callback=statistics.median(shares) if row["backend"] == "native" else float("nan"),
+               update=statistics.median(updates),
+               update_share=statistics.median(
+                   [u * r / config.env_steps_per_train_step for u, r in zip(updates, train_rates)]))
   return row
 
 
@@ -208,13 +233,15 @@ def run(args) -> None:
         f"train step; {c.update_epochs} epochs x {c.num_minibatches} minibatches; decoder "
         f"{c.decoder}, b = {c.n_synergies}; ratios: median (min-max) of {args.repeats} repeats")
   print("| backend | batch | rollout env/s | physics env/s | physics/rollout | train env/s | "
-        "train/rollout | callback share | compile s (train, physics) | peak mem GiB |")
-  print("|---|---|---|---|---|---|---|---|---|---|")
+        "train/rollout | callback share | update s (share) | compile s (train, physics) | "
+        "peak mem GiB |")
+  print("|---|---|---|---|---|---|---|---|---|---|---|")
   for config in configs:
     r = bench_row(config, args)
     train = (f"{r['train']:,.0f} | {r['train_ratio']} | {r['callback']:.0%} | "
+             f"{r['update']:.3f} ({r['update_share']:.0%}) | "
              f"{r['compile']:.1f}, {r['physics_compile']:.1f}" if args.train
-             else f"- | - | - | -, {r['physics_compile']:.1f}")
+             else f"- | - | - | - | -, {r['physics_compile']:.1f}")
     print(f"| {r['backend']} | {r['batch']} | {r['rollout']:,.0f} | {r['physics']:,.0f} | "
           f"{r['physics_ratio']} | {train} | {r['peak']:.2f} |", flush=True)
 
