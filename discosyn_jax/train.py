@@ -97,11 +97,13 @@ class Trainer:
     return jax.device_put(jax.tree.map(jnp.asarray, state), self.state_shardings(state))
 
   def state_shardings(self, state: TrainState):
-    """Env states split over the mesh on their env axis; everything else replicated."""
+    """Env states split over the mesh on their env axis; everything else replicated (and
+    empty arrays, e.g. a scene without sensors, which XLA always returns replicated)."""
+    replicated, batched = devices_lib.replicated(self.mesh), devices_lib.batched(self.mesh)
     return state.replace(
-        **{f: jax.tree.map(lambda _: devices_lib.replicated(self.mesh), getattr(state, f))
+        **{f: jax.tree.map(lambda _: replicated, getattr(state, f))
            for f in ("params", "opt_state", "normalizers", "rng", "step")},
-        env_states=jax.tree.map(lambda _: devices_lib.batched(self.mesh), state.env_states))
+        env_states=jax.tree.map(lambda x: batched if x.size else replicated, state.env_states))
 
   # -- acting ----------------------------------------------------------------
   def _normalize(self, obs, norm):

@@ -20,8 +20,9 @@ from tests.test_trainer import two_task_trainer
 
 def params_after(trainer: Trainer, steps: int, evaluate: bool = False):
   state = trainer.init()
+  step = trainer.train_step.lower(state).compile()  # as the loop does: layouts must hold
   for _ in range(steps):
-    state, metrics = trainer.train_step(state)
+    state, metrics = step(state)
   results = None
   if evaluate:  # not split: the callbacks of the evaluation run on one device
     results = trainer.evaluate(state.params, state.normalizers, jax.random.PRNGKey(1))
