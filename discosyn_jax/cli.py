@@ -111,12 +111,14 @@ def train_config(args, base=None):
 
 def cmd_train(args) -> None:
   from discosyn_jax import config as config_lib
+  from discosyn_jax import devices
   from discosyn_jax import loop
 
   out = pathlib.Path(args.out or f"runs/{args.preset or 'quickstart'}-seed{args.seed or 0}")
   saved = out / loop.CONFIG_FILE
   base = config_lib.load(saved) if args.resume and saved.is_file() else None
   config = train_config(args, base)
+  devices.mesh_for(config, args.devices)  # a bad device count fails before the run directory
   print(f"run directory: {out}")
   loop.train(config, out, resume=args.resume, force=args.force, progress=not args.no_progress,
              devices=args.devices)

@@ -45,11 +45,16 @@ def batched(mesh: Mesh, leading: int = 0) -> NamedSharding:
   return NamedSharding(mesh, P(*([None] * leading), AXIS))
 
 
-def check_divisible(mesh: Mesh, **sizes: int) -> None:
-  """ValueError naming the first size that does not split evenly over the devices."""
+def mesh_for(config, devices=None) -> Mesh:
+  """The mesh a training config runs on; ValueError naming the first batch size (envs per
+  task, samples per minibatch) that does not split evenly over its devices."""
+  mesh = make_mesh(devices)
+  sizes = {"num_envs": config.num_envs,
+           "minibatch_size": config.num_envs * config.unroll_length // config.num_minibatches}
   for name, size in sizes.items():
     if size % mesh.size:
       raise ValueError(f"{name} = {size} does not split over {mesh.size} devices")
+  return mesh
 
 
 def initialize_distributed(**kwargs) -> None:

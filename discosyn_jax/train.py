@@ -60,10 +60,7 @@ class Trainer:
 
   def __init__(self, config: TrainConfig, envs: Sequence[Env] | None = None, devices=None):
     self.config = config.validate()
-    self.mesh = devices_lib.make_mesh(devices)
-    devices_lib.check_divisible(
-        self.mesh, num_envs=config.num_envs,
-        minibatch_size=config.num_envs * config.unroll_length // config.num_minibatches)
+    self.mesh = devices_lib.mesh_for(config, devices)
     self.envs = list(envs) if envs is not None else make_envs(config)
     if len(self.envs) != len(config.tasks):
       raise ValueError(f"{len(self.envs)} envs given for {len(config.tasks)} tasks")

@@ -37,3 +37,12 @@ def test_this_process_has_one_device_and_bad_counts_are_refused():
   with pytest.raises(ValueError, match="between 1 and 1"):
     devices.make_mesh(2)
 
+
+
+def test_train_refuses_more_devices_than_there_are_before_making_the_run(tmp_path, capsys):
+  from discosyn_jax import cli
+
+  out = tmp_path / "run"
+  assert cli.main(["train", "--devices", "2", "--out", str(out), "--no-progress"]) == 2
+  assert "--devices must be between 1 and 1" in capsys.readouterr().err
+  assert not out.exists()
