@@ -33,3 +33,7 @@ def _import_mjx_quietly() -> None:
 
 
 _import_mjx_quietly()
+
+from discosyn_jax import compile_cache as _compile_cache  # noqa: E402
+
+_compile_cache.enable()

@@ -120,14 +120,17 @@ def train_config(args, base=None):
 
 def cmd_train(args) -> None:
   from discosyn_jax import config as config_lib
+  from discosyn_jax import devices
   from discosyn_jax import loop
 
   out = pathlib.Path(args.out or f"runs/{args.preset or 'quickstart'}-seed{args.seed or 0}")
   saved = out / loop.CONFIG_FILE
   base = config_lib.load(saved) if args.resume and saved.is_file() else None
   config = train_config(args, base)
+  devices.mesh_for(config, args.devices)  # a bad device count fails before the run directory
   print(f"run directory: {out}")
-  loop.train(config, out, resume=args.resume, force=args.force, progress=not args.no_progress)
+  loop.train(config, out, resume=args.resume, force=args.force, progress=not args.no_progress,
+             devices=args.devices)
 
 
 def cmd_eval(args) -> None:
@@ -222,6 +225,7 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("--resume", action="store_true", help="continue the run in --out")
   p.add_argument("--force", action="store_true", help="replace the run in --out")
   p.add_argument("--no-progress", action="store_true", help="no progress bar")
+  add_device_flags(p)
   p.set_defaults(fn=cmd_train)
 
   p = sub.add_parser("eval", help="evaluate a run (its latest checkpoint) or one checkpoint")
@@ -293,13 +297,32 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("--step", type=int, default=14, help="control steps of the scripted motion first")
   p.add_argument("--seed", type=int, default=0)
   p.set_defaults(fn=cmd_render_scenes)
+  add_bench_parser(sub)
   return parser
+
+
+def add_device_flags(p) -> None:
+  p.add_argument("--devices", type=int, help="devices to split the env batch over (default: all)")
+  p.add_argument("--distributed", action="store_true",
+                 help="multi-host: jax.distributed.initialize() first (docs/SCALING.md)")
+
+
+def add_bench_parser(sub) -> None:
+  from experiments import bench
+
+  p = sub.add_parser("bench", help="physics and training env steps/s beside raw MuJoCo C")
+  bench.build_parser(p)
+  p.set_defaults(fn=bench.run)
 
 
 def main(argv: list[str] | None = None) -> int:
   from discosyn_jax.loop import TrainingDiverged
 
   args = build_parser().parse_args(argv)
+  if getattr(args, "distributed", False):  # before anything touches a device
+    from discosyn_jax import devices
+
+    devices.initialize_distributed()
   try:
     if getattr(args, "batch", 1) < 1:
       raise UsageError(f"--batch must be at least 1, not {args.batch}")

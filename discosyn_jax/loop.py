@@ -110,11 +110,13 @@ def format_table(results: dict[str, dict[str, float]], step: int, config: TrainC
 
 
 def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, force: bool = False,
-          progress: bool = True, trainer: Trainer | None = None, log=print) -> dict[str, Any]:
-  """Run (or continue) a training run in `run_dir`; return the final evaluation."""
+          progress: bool = True, trainer: Trainer | None = None, log=print,
+          devices=None) -> dict[str, Any]:
+  """Run (or continue) a training run in `run_dir`; return the final evaluation.
+  `devices`: the count to split the env batch over (default: all; see devices.py)."""
   run_dir = pathlib.Path(run_dir)
   config = prepare_run_dir(run_dir, config, resume, force)
-  trainer = trainer or Trainer(config)
+  trainer = trainer or Trainer(config, devices=devices)
   state = trainer.init()
   if resume:
     checkpoint = checkpoints.latest(run_dir)

@@ -7,6 +7,9 @@
   PPO epochs over minibatches, every task's samples in every minibatch; the discriminator is
   fitted in the same optimiser steps on its own parameters (see ppo.py)
 
+Over several devices (devices.py) the rollout runs under `shard_map`, each device stepping
+its share of the envs; the rest is partitioned by XLA on the sharded env/sample axis.
+
 The bonus log q(z|a) is computed with the discriminator as it was when the batch was
 collected, then the discriminator is fitted to that batch during the same update: the
 paper's Algorithm 1 fits q first, which differs by one update of q.
@@ -23,7 +26,9 @@ from brax.envs.base import Env
 from brax.training.acme import running_statistics
 from brax.training.agents.ppo.losses import compute_gae
 from flax import struct
+from jax.sharding import PartitionSpec as P
 
+from discosyn_jax import devices as devices_lib
 from discosyn_jax import networks, ppo, wrappers
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.networks import DiscoSyn, gaussian_log_prob
@@ -49,11 +54,13 @@ class Trainer:
   """Builds the module, the optimiser and the jitted functions for one config.
 
   `envs` defaults to the registered tasks; any Brax-style env with `episode_length`, a
-  `success` metric and actions in [-1, 1] works (the tests use a tiny one).
+  `success` metric and actions in [-1, 1] works (the tests use a tiny one). `devices`
+  (a list, a count, or None for all) holds the mesh the env batch is split over.
   """
 
-  def __init__(self, config: TrainConfig, envs: Sequence[Env] | None = None):
+  def __init__(self, config: TrainConfig, envs: Sequence[Env] | None = None, devices=None):
     self.config = config.validate()
+    self.mesh = devices_lib.mesh_for(config, devices)
     self.envs = list(envs) if envs is not None else make_envs(config)
     if len(self.envs) != len(config.tasks):
       raise ValueError(f"{len(self.envs)} envs given for {len(config.tasks)} tasks")
@@ -89,8 +96,18 @@ class Trainer:
     norms = tuple(running_statistics.init_state(jnp.zeros((s,))) for s in self.obs_sizes)
     state = TrainState(params=params, opt_state=self.optimizer.init(params), normalizers=norms,
                        env_states=envs, rng=key, step=jnp.zeros((), jnp.int32))
-    # every leaf an array, as train_step returns them: one compiled signature, one checkpoint layout
-    return jax.tree.map(jnp.asarray, state)
+    # every leaf an array laid out as train_step returns it: one compiled signature, one
+    # checkpoint layout
+    return jax.device_put(jax.tree.map(jnp.asarray, state), self.state_shardings(state))
+
+  def state_shardings(self, state: TrainState):
+    """Env states split over the mesh on their env axis; everything else replicated (and
+    empty arrays, e.g. a scene without sensors, which XLA always returns replicated)."""
+    replicated, batched = devices_lib.replicated(self.mesh), devices_lib.batched(self.mesh)
+    return state.replace(
+        **{f: jax.tree.map(lambda _: replicated, getattr(state, f))
+           for f in ("params", "opt_state", "normalizers", "rng", "step")},
+        env_states=jax.tree.map(lambda x: batched if x.size else replicated, state.env_states))
 
   # -- acting ----------------------------------------------------------------
   def _normalize(self, obs, norm):
@@ -100,24 +117,45 @@ class Trainer:
 
   def act(self, params, task: int, obs, key=None):
     """(z, a, log pi(z, a | s)) for normalised `obs`; the means when `key` is None."""
-    z_mean, z_log_std = self.model.apply(params, task, obs, method=DiscoSyn.policy)
     if key is None:
+      z_mean, _ = self.model.apply(params, task, obs, method=DiscoSyn.policy)
       return z_mean, self.model.apply(params, z_mean, method=DiscoSyn.decode)[0], None
+    return self._sample(params, task, obs, self._noise(key, obs.shape[0]))
+
+  def _noise(self, key, batch: int):
+    """The standard normal draws behind z and a, drawn apart from the networks so that a
+    rollout split over devices uses the numbers one device would."""
     z_key, a_key = jax.random.split(key)
-    z = z_mean + jnp.exp(z_log_std) * jax.random.normal(z_key, z_mean.shape)
+    return (jax.random.normal(z_key, (batch, self.model.n_synergies)),
+            jax.random.normal(a_key, (batch, self.action_size)))
+
+  def _sample(self, params, task: int, obs, noise):
+    z_noise, a_noise = noise
+    z_mean, z_log_std = self.model.apply(params, task, obs, method=DiscoSyn.policy)
+    z = z_mean + jnp.exp(z_log_std) * z_noise
     log_prob = gaussian_log_prob(z, z_mean, z_log_std)
     a_mean, a_log_std = self.model.apply(params, z, method=DiscoSyn.decode)
     if a_log_std is None:
       return z, a_mean, log_prob
-    a = a_mean + jnp.exp(a_log_std) * jax.random.normal(a_key, a_mean.shape)
+    a = a_mean + jnp.exp(a_log_std) * a_noise
     return z, a, log_prob + gaussian_log_prob(a, a_mean, a_log_std)
 
   def _unroll(self, params, norm, env_state, key, task: int):
+    """`unroll_length` steps of every env: under shard_map, each device its own envs."""
     env = self._train[task]
+    keys = jax.random.split(key, self.config.unroll_length)
+    noise = jax.vmap(lambda k: self._noise(k, self.config.num_envs))(keys)  # (T, B, ...)
+    envs, time_envs = P(devices_lib.AXIS), P(None, devices_lib.AXIS)
+    local = jax.shard_map(lambda *args: self._local_unroll(env, task, *args), mesh=self.mesh,
+                          in_specs=(P(), P(), envs, time_envs),
+                          out_specs=(envs, time_envs), check_vma=False)
+    return local(params, norm, env_state, noise)
 
-    def step(env_state, key):
+  def _local_unroll(self, env, task: int, params, norm, env_state, noise):
+
+    def step(env_state, noise):
       obs = env_state.obs
-      z, a, log_prob = self.act(params, task, self._normalize(obs, norm), key)
+      z, a, log_prob = self._sample(params, task, self._normalize(obs, norm), noise)
       env_state = env.step(env_state, a)
       info = env_state.info
       out = dict(obs=obs, z=z, action=a, log_prob=log_prob, reward=env_state.reward,
@@ -126,8 +164,7 @@ class Trainer:
                  metrics=env_state.metrics)
       return env_state, out
 
-    keys = jax.random.split(key, self.config.unroll_length)
-    return jax.lax.scan(step, env_state, keys)
+    return jax.lax.scan(step, env_state, noise)
 
   # -- the training step -----------------------------------------------------
   def _train_step(self, state: TrainState):
@@ -172,6 +209,9 @@ class Trainer:
     metrics["finite"] = finite
     new = TrainState(params=params, opt_state=opt_state, normalizers=tuple(norms),
                      env_states=tuple(env_states), rng=rng, step=state.step + 1)
+    # pin the layout of the returned state to the one it came in with (donation, next step)
+    new = jax.lax.with_sharding_constraint(new, self.state_shardings(new))
+    metrics = jax.lax.with_sharding_constraint(metrics, devices_lib.replicated(self.mesh))
     return new, metrics
 
   def _update(self, params, opt_state, samples: list[ppo.Samples], key):
@@ -191,8 +231,10 @@ class Trainer:
 
       def shuffle(s, k):
         perm = jax.random.permutation(k, s.obs.shape[0])
-        return jax.tree.map(
+        batches = jax.tree.map(
             lambda x: x[perm].reshape((cfg.num_minibatches, -1) + x.shape[1:]), s)
+        # every minibatch split over the devices: each computes its share of the gradient
+        return jax.lax.with_sharding_constraint(batches, devices_lib.batched(self.mesh, 1))
 
       batches = [shuffle(s, k) for s, k in zip(samples, keys)]
       return jax.lax.scan(minibatch_step, carry, batches)

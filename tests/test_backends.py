@@ -68,3 +68,19 @@ def test_native_and_mjx_trajectories_agree_on_valve3():
   assert native[-1, valve_q] - native[0, valve_q] > 0.2  # the fingers did turn it
   np.testing.assert_allclose(mjx[:, hand_q], native[:, hand_q], atol=0.02)
   np.testing.assert_allclose(mjx[:, valve_q], native[:, valve_q], atol=0.05)
+
+
+def test_the_mjx_implementation_is_chosen_by_name_and_checked(monkeypatch):
+  import importlib.util
+
+  from discosyn_jax.physics import mjx_backend
+
+  monkeypatch.setenv("DISCOSYN_MJX_IMPL", "cuda")
+  with pytest.raises(ValueError, match="unknown MJX implementation 'cuda'"):
+    mjx_backend.default_impl()
+  monkeypatch.setenv("DISCOSYN_MJX_IMPL", "jax")
+  assert mjx_backend.default_impl() == "jax"
+  if importlib.util.find_spec("mujoco_warp") is None:
+    monkeypatch.setenv("DISCOSYN_MJX_IMPL", "warp")
+    with pytest.raises(ValueError, match="needs mujoco_warp"):
+      mjx_backend.default_impl()

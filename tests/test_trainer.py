@@ -19,9 +19,10 @@ SMALL = dict(policy_hidden=(32, 32), value_hidden=(32, 32), decoder_hidden=(32, 
 PPO = dict(decoder="identity", n_synergies=20, alpha2=0.0, alpha3=0.0, init_z_std=0.5)
 
 
-def two_task_trainer(**overrides):
+def two_task_trainer(devices=None, **overrides):
   config = TrainConfig(tasks=("a", "b"), n_synergies=2, **{**SMALL, **overrides})
-  return Trainer(config, envs=[ReachAction(TARGET), ReachAction(-TARGET, obs_size=5)])
+  return Trainer(config, envs=[ReachAction(TARGET), ReachAction(-TARGET, obs_size=5)],
+                 devices=devices)
 
 
 def random_samples(key, obs_size, n=16, b=3):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib.util
+import os
 
 import jax
 import jax.numpy as jnp
@@ -12,11 +13,26 @@ from mujoco import mjx
 from discosyn_jax.physics import PhysicsView
 
 
+IMPLS = ("jax", "warp")
+
+
 def default_impl() -> str:
-  """"warp" on a GPU with mujoco_warp installed, else MJX's JAX implementation."""
+  """`DISCOSYN_MJX_IMPL` (jax | warp) where set; else "warp" on a GPU with mujoco_warp
+  installed (`pip install ".[warp]"`), else MJX's JAX implementation."""
+  chosen = os.environ.get("DISCOSYN_MJX_IMPL", "").strip()
+  if chosen:
+    return check_impl(chosen)
   if jax.default_backend() == "gpu" and importlib.util.find_spec("mujoco_warp"):
     return "warp"
   return "jax"
+
+
+def check_impl(impl: str) -> str:
+  if impl not in IMPLS:
+    raise ValueError(f"unknown MJX implementation {impl!r}; known: {', '.join(IMPLS)}")
+  if impl == "warp" and not importlib.util.find_spec("mujoco_warp"):
+    raise ValueError('MJX implementation "warp" needs mujoco_warp: pip install ".[warp]"')
+  return impl
 
 
 class MjxBackend:
@@ -25,7 +41,7 @@ class MjxBackend:
   def __init__(self, model: mujoco.MjModel, n_substeps: int, impl: str | None = None):
     self.mj_model = model
     self.n_substeps = int(n_substeps)
-    self.impl = impl or default_impl()
+    self.impl = check_impl(impl) if impl else default_impl()
     self.model = mjx.put_model(model, impl=self.impl)
     self._data0 = mjx.make_data(self.model, impl=self.impl)
 

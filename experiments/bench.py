@@ -1,0 +1,254 @@
+"""Benchmark: physics and training env steps/s per backend and batch, beside raw MuJoCo C.
+
+  discosyn bench                                  # set1-disco3-linear, native, its batch (128)
+  discosyn bench --batches 64 128 256 --repeats 5
+  discosyn bench --backends native mjx --batches 16 --steps 1 --repeats 1   # MJX on a CPU: small
+  discosyn bench --no-train --tasks set2 unseen sparse --batches 64         # physics only
+
+For every backend and batch size (envs per task) it prints, in env (control) steps per second:
+  rollout    raw `mujoco.rollout` of the same models (batch envs x unroll_length steps per
+             task, one task after the other as in the train step): the machine's limit
+  physics    the jitted, vmapped `HandEnv.step` of the backend over the same steps
+  train      whole train steps of the preset (rollouts, GAE, PPO epochs, discriminator)
+  train/rollout, physics/rollout   the ratios, median over --repeats with min-max: every
+             repeat times rollout, physics and training one after the other, so a change in
+             the machine's load hits both sides of a ratio
+  callback   native only: the share of train-step time spent inside the host callbacks
+  update     seconds of the PPO update alone (epochs x minibatches, jitted apart, on samples
+             of the step's shapes) and its share of a train step: the part outside physics
+  compile    seconds to lower and compile the train step (and the physics step)
+  peak mem   GiB: the process's peak resident memory so far (CPU), or the device's peak
+             bytes in use (accelerators)
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import resource
+import statistics
+import time
+
+import jax
+import mujoco
+import numpy as np
+from mujoco import rollout
+
+from discosyn_jax import ppo
+from discosyn_jax.train import Trainer
+
+
+def native_threads() -> int:
+  return int(os.environ.get("DISCOSYN_NATIVE_THREADS", os.cpu_count() or 1))
+
+
+class RawRollout:
+  """`mujoco.rollout` of one task's model: `batch` envs x `steps` control steps from the
+  initial state, random controls held for the task's substeps."""
+
+  def __init__(self, env, batch: int, steps: int, nthread: int):
+    self.model, n = env.mj_model, env.task.config.n_substeps
+    self.data = [mujoco.MjData(self.model) for _ in range(nthread)]
+    mujoco.mj_forward(self.model, self.data[0])
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    state = np.empty(mujoco.mj_stateSize(self.model, spec))
+    mujoco.mj_getState(self.model, self.data[0], state, spec)
+    self.state = np.tile(state, (batch, 1))
+    lo, hi = self.model.actuator_ctrlrange.T
+    self.ctrl = np.random.default_rng(0).uniform(lo, hi, (batch, steps, self.model.nu)).repeat(n, axis=1)
+    self.pool = rollout.Rollout(nthread=nthread)
+
+  def __call__(self):
+    self.pool.rollout(self.model, self.data, self.state, self.ctrl)
+
+  def close(self):
+    self.pool.close()
+
+
+def physics_runner(envs, batch: int, steps: int):
+  """(a function that steps every env `steps` times at `batch`, compile seconds)."""
+  key = jax.random.PRNGKey(0)
+  states = [jax.jit(jax.vmap(env.reset))(jax.random.split(key, batch)) for env in envs]
+  actions = jax.random.uniform(key, (steps, batch, envs[0].action_size), minval=-1, maxval=1)
+
+  def run(states, actions):
+    out = []
+    for env, state in zip(envs, states):
+      step = jax.vmap(env.step)
+      out.append(jax.lax.scan(lambda s, a: (step(s, a), None), state, actions)[0].obs)
+    return out
+
+  start = time.perf_counter()
+  compiled = jax.jit(run).lower(states, actions).compile()
+  compile_s = time.perf_counter() - start
+  return lambda: jax.block_until_ready(compiled(states, actions)), compile_s
+
+
+class CallbackClock:
+  """Wall time spent in the native backends' host callbacks (installed before tracing)."""
+
+  def __init__(self, envs):
+    self.seconds = 0.0
+    for env in envs:
+      if env.backend == "native":
+        for name in ("_host_step", "_host_init"):
+          setattr(env.physics, name, self._timed(getattr(env.physics, name)))
+
+  def _timed(self, fn):
+    def run(*args):
+      start = time.perf_counter()
+      try:
+        return fn(*args)
+      finally:
+        self.seconds += time.perf_counter() - start
+    return run
+
+
+def update_runner(trainer: Trainer, state):
+  """The PPO update of a train step alone, on random samples of the step's shapes."""
+  n = trainer.config.num_envs * trainer.config.unroll_length
+  keys = iter(jax.random.split(jax.random.PRNGKey(0), 6 * len(trainer.obs_sizes)))
+  normal = lambda *shape: jax.random.normal(next(keys), (n, *shape))
+  samples = [ppo.Samples(obs=normal(size), z=normal(trainer.model.n_synergies),
+                         action=normal(trainer.action_size), log_prob=normal(),
+                         advantage=normal(), target=normal())
+             for size in trainer.obs_sizes]
+  # copies: the train step donates the state it is given
+  params, opt_state = jax.tree.map(lambda x: x.copy(), (state.params, state.opt_state))
+  args = (params, opt_state, samples, jax.random.PRNGKey(1))
+  compiled = jax.jit(trainer._update).lower(*args).compile()
+  return lambda: jax.block_until_ready(compiled(*args))
+
+
+def peak_memory_gib() -> float:
+  device = jax.devices()[0]
+  stats = device.memory_stats() if device.platform != "cpu" else None
+  if stats and "peak_bytes_in_use" in stats:
+    return stats["peak_bytes_in_use"] / 2**30
+  return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20  # KiB on Linux
+
+
+def _seconds(fn) -> float:
+  start = time.perf_counter()
+  fn()
+  return time.perf_counter() - start
+
+
+def _median_range(values) -> str:
+  return f"{statistics.median(values):.2f} ({min(values):.2f}-{max(values):.2f})"
+
+
+def bench_row(config, args) -> dict:
+  """Every figure of one backend and batch: see the module docstring."""
+  trainer = Trainer(config, devices=args.devices) if args.train else None
+  envs = trainer.envs if trainer else _envs(config)
+  clock = CallbackClock(envs)
+  T, B = config.unroll_length, config.num_envs
+  total = len(envs) * B * T  # env steps of one pass over every task
+  raw = [RawRollout(env, B, T, native_threads()) for env in envs]
+  physics, physics_compile = physics_runner(envs, B, T)
+  row = dict(backend=envs[0].backend, batch=B, physics_compile=physics_compile)
+  if trainer:
+    state = trainer.init()
+    start = time.perf_counter()
+    train_step = trainer.train_step.lower(state).compile()
+    row["compile"] = time.perf_counter() - start
+    state, metrics = train_step(state)  # warm-up
+    jax.block_until_ready(metrics)
+    update = update_runner(trainer, state)
+    update()
+  for fn in raw:
+    fn()
+  physics()
+
+  rollout_rates, physics_rates, train_rates, shares, updates = [], [], [], [], []
+  for _ in range(args.repeats):
+    rollout_rates.append(total / sum(_seconds(fn) for fn in raw))
+    physics_rates.append(total / _seconds(physics))
+    if trainer:
+      clock.seconds = 0.0
+      start = time.perf_counter()
+      for _ in range(args.steps):
+        state, metrics = train_step(state)
+      jax.block_until_ready(metrics)
+      seconds = time.perf_counter() - start
+      train_rates.append(args.steps * config.env_steps_per_train_step / seconds)
+      shares.append(clock.seconds / seconds)
+      updates.append(_seconds(update))
+  for fn in raw:
+    fn.close()
+  row.update(rollout=statistics.median(rollout_rates), physics=statistics.median(physics_rates),
+             physics_ratio=_median_range([p / r for p, r in zip(physics_rates, rollout_rates)]),
+             peak=peak_memory_gib())
+  if trainer:
+    row.update(train=statistics.median(train_rates),
+               train_ratio=_median_range([t / r for t, r in zip(train_rates, rollout_rates)]),
+               callback=statistics.median(shares) if row["backend"] == "native" else float("nan"),
+               update=statistics.median(updates),
+               update_share=statistics.median(
+                   [u * r / config.env_steps_per_train_step for u, r in zip(updates, train_rates)]))
+  return row
+
+
+def _envs(config):
+  import tasks
+
+  return [tasks.make(name, backend=config.backend) for name in config.tasks]
+
+
+def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.ArgumentParser:
+  parser = parser or argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  parser.add_argument("--preset", default="set1-disco3-linear", help="the training config")
+  parser.add_argument("--tasks", nargs="+", help="tasks or task sets (default: the preset's)")
+  parser.add_argument("--backends", nargs="+", default=["native"], choices=["native", "mjx"])
+  parser.add_argument("--batches", type=int, nargs="+", help="envs per task (default: the preset's)")
+  parser.add_argument("--epochs", type=int, help="PPO epochs (default: the preset's)")
+  parser.add_argument("--steps", type=int, default=3, help="train steps per timing")
+  parser.add_argument("--repeats", type=int, default=3, help="interleaved timings per row")
+  parser.add_argument("--devices", type=int, help="devices to split the env batch over (default: all)")
+  parser.add_argument("--no-train", dest="train", action="store_false", help="physics only")
+  return parser
+
+
+def run(args) -> None:
+  import tasks
+  from experiments import presets
+
+  base = presets.preset(args.preset)
+  if args.tasks:
+    base = base.replace(tasks=tuple(tasks.expand(args.tasks)))
+  if args.epochs is not None:
+    base = base.replace(update_epochs=args.epochs)
+  for name in ("steps", "repeats"):
+    if getattr(args, name) < 1:
+      raise ValueError(f"--{name} must be at least 1, not {getattr(args, name)}")
+  configs = [base.replace(backend=backend, num_envs=batch).validate()
+             for backend in args.backends for batch in (args.batches or [base.num_envs])]
+  c = configs[0]
+  print(f"# {platform.node()}: {os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}; "
+        f"jax {jax.__version__} on {jax.device_count()} x {jax.devices()[0].device_kind}, "
+        f"mujoco {mujoco.__version__}, {native_threads()} native threads")
+  print(f"# preset {args.preset}: {len(c.tasks)} tasks x envs x {c.unroll_length} steps per "
+        f"train step; {c.update_epochs} epochs x {c.num_minibatches} minibatches; decoder "
+        f"{c.decoder}, b = {c.n_synergies}; ratios: median (min-max) of {args.repeats} repeats")
+  print("| backend | batch | rollout env/s | physics env/s | physics/rollout | train env/s | "
+        "train/rollout | callback share | update s (share) | compile s (train, physics) | "
+        "peak mem GiB |")
+  print("|---|---|---|---|---|---|---|---|---|---|---|")
+  for config in configs:
+    r = bench_row(config, args)
+    train = (f"{r['train']:,.0f} | {r['train_ratio']} | {r['callback']:.0%} | "
+             f"{r['update']:.3f} ({r['update_share']:.0%}) | "
+             f"{r['compile']:.1f}, {r['physics_compile']:.1f}" if args.train
+             else f"- | - | - | - | -, {r['physics_compile']:.1f}")
+    print(f"| {r['backend']} | {r['batch']} | {r['rollout']:,.0f} | {r['physics']:,.0f} | "
+          f"{r['physics_ratio']} | {train} | {r['peak']:.2f} |", flush=True)
+
+
+def main(argv=None):
+  run(build_parser().parse_args(argv))
+
+
+if __name__ == "__main__":
+  main()

@@ -1,0 +1,18 @@
+"""`discosyn bench`: one row per backend and batch; bad input is exit 2."""
+
+from discosyn_jax import cli
+
+
+def test_bench_prints_a_physics_row_per_batch(capsys):
+  argv = ["bench", "--tasks", "valve1", "--batches", "2", "4", "--no-train", "--repeats", "1"]
+  assert cli.main(argv) == 0
+  rows = [l.split("|") for l in capsys.readouterr().out.splitlines() if l.startswith("| native")]
+  assert [r[2].strip() for r in rows] == ["2", "4"]
+  for r in rows:
+    assert float(r[3].replace(",", "")) > 0 and float(r[4].replace(",", "")) > 0  # env/s
+    assert r[6].strip() == "-"  # no training asked
+
+
+def test_bench_refuses_zero_repeats(capsys):
+  assert cli.main(["bench", "--repeats", "0", "--no-train"]) == 2
+  assert "--repeats must be at least 1" in capsys.readouterr().err
