@@ -171,8 +171,6 @@ def solved_tables(runs: list[Run], threshold: float) -> str:
 
 
 def variance_table(fits: list[dict[str, Any]]) -> str:
-  if not fits:
-    return "No synergy fits among the folders given.\n"
   sizes = sorted({int(k) for f in fits for m in ("PCA", "AE") for k in f.get(m, {})})
   lines = ["| set | method | " + " | ".join(f"k = {k}" for k in sizes) + " | samples |",
            "|---" * (len(sizes) + 3) + "|"]
@@ -215,7 +213,8 @@ def curves(runs: list[Run], path: pathlib.Path, title: str, metric: str = "succe
   import matplotlib.pyplot as plt
 
   task_names = list(dict.fromkeys(t for r in runs for t in r.config.tasks))
-  fig, axes = plt.subplots(1, len(task_names), figsize=(4 * len(task_names), 3.2), squeeze=False)
+  fig, axes = plt.subplots(1, len(task_names), figsize=(max(6, 4 * len(task_names)), 3.4),
+                           squeeze=False)
   for ax, task in zip(axes[0], task_names):
     for method in _order({r.method for r in runs if task in r.config.tasks}):
       group = [r for r in runs if r.method == method and task in r.config.tasks and r.evals]
@@ -307,20 +306,23 @@ def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = Tr
   if scales:
     lines += [f"Scales: {', '.join(scales)}.", ""]
 
-  lines += ["## Tasks solved", "", solved_tables(runs, threshold)]
-  lines += ["## Explained variance of the action data", "",
-            "PCA and autoencoder fitted to the deterministic actions of the independent "
-            "full-action policies of each set (all tasks pooled).", "", variance_table(fits)]
-
-  lines += ["## Training curves", ""]
   main = [r for r in runs if r.experiment.split("-")[0] in MAIN_EXPERIMENTS or r.experiment == "train"]
+  if main:
+    lines += ["## Tasks solved", "", solved_tables(runs, threshold)]
+  if fits:
+    lines += ["## Explained variance of the action data", "",
+              "PCA and autoencoder fitted to the deterministic actions of the independent "
+              "full-action policies of each set (all tasks pooled).", "", variance_table(fits)]
+
+  if main:
+    lines += ["## Training curves", ""]
   for task_set in sorted({r.task_set for r in main}):
     group = [r for r in main if r.task_set == task_set]
     name = f"curves-{task_set}.png".replace("+", "_")
     curves(group, out / name, f"{task_set}: deterministic evaluation success")
     lines += [f"![{task_set}]({name})", ""]
 
-  if with_tsne:
+  if with_tsne and any(r.method.startswith("DiscoSyn") for r in main):
     lines += ["## t-SNE of the low-dimensional actions", ""]
     for task_set in sorted({r.task_set for r in main}):
       disco = [r for r in main if r.method.startswith("DiscoSyn") and r.evals]
