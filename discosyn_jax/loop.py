@@ -80,7 +80,7 @@ def load_run(path: pathlib.Path) -> tuple[TrainConfig, pathlib.Path]:
 
 
 def restore(trainer: Trainer, checkpoint: pathlib.Path) -> TrainState:
-  return checkpoints.restore(checkpoint, trainer.init())
+  return checkpoints.restore(checkpoint, trainer.init(load_decoder=False))
 
 
 def load_trained(path: pathlib.Path, make_trainer=Trainer, **changes) -> tuple[Trainer, TrainState]:
@@ -117,12 +117,12 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, f
   run_dir = pathlib.Path(run_dir)
   config = prepare_run_dir(run_dir, config, resume, force)
   trainer = trainer or Trainer(config, devices=devices)
-  state = trainer.init()
-  if resume:
-    checkpoint = checkpoints.latest(run_dir)
-    if checkpoint is not None:
-      state = checkpoints.restore(checkpoint, state)
-      log(f"resumed from {checkpoint} at step {int(state.step)}")
+  checkpoint = checkpoints.latest(run_dir) if resume else None
+  if checkpoint is not None:
+    state = restore(trainer, checkpoint)
+    log(f"resumed from {checkpoint} at step {int(state.step)}")
+  else:
+    state = trainer.init()
   start_step = int(state.step)
 
   start = time.perf_counter()

@@ -79,13 +79,15 @@ class Trainer:
     self.episodes = jax.jit(self._episodes, static_argnames=("task", "episodes", "keep_states"))
 
   # -- state -----------------------------------------------------------------
-  def init(self, seed: int | None = None, decoder_params=None) -> TrainState:
+  def init(self, seed: int | None = None, decoder_params=None,
+           load_decoder: bool = True) -> TrainState:
     """A fresh state; `decoder_params` (or else the config's `decoder_from`) replaces the
-    initial decoder."""
+    initial decoder. `load_decoder=False` skips `decoder_from`: the template of a state a
+    checkpoint will fill, which needs no source decoder any more."""
     key = jax.random.PRNGKey(self.config.seed if seed is None else seed)
     key, init_key, *env_keys = jax.random.split(key, 2 + len(self.envs))
     params = self.model.init(init_key, [jnp.zeros((1, s)) for s in self.obs_sizes])
-    if decoder_params is None and self.config.decoder_from:
+    if decoder_params is None and self.config.decoder_from and load_decoder:
       from discosyn_jax import synergies
 
       decoder_params = synergies.load_decoder(self.config.decoder_from, self.config)

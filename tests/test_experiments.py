@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from sklearn.decomposition import PCA
 
-from discosyn_jax import checkpoints, cli, logs, report, synergies
+from discosyn_jax import checkpoints, cli, logs, loop, report, synergies
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.train import Trainer, _episode_metrics
 from experiments import paper
@@ -215,6 +215,24 @@ def test_train_flag_decoder_from_sets_a_frozen_space(tmp_path):
   args = cli.build_parser().parse_args(["train", "--decoder-from", str(path), "--synergies", "3"])
   with pytest.raises(cli.UsageError, match="holds a linear decoder with 4 synergies"):
     cli.train_config(args)
+
+
+def test_a_frozen_run_resumes_without_its_decoder_source(experiments, tmp_path):
+  # the checkpoint holds the decoder: a moved or deleted source does not stop a resume
+  _, params = synergies.read(experiments / "synergies-set1-seed0" / "pca4.npz")
+  fields = dict(decoder="linear", n_synergies=4, decoder_bias=True, decoder_hidden=(128, 128))
+  source = synergies.save(tmp_path / "pca4.npz", params, fields, method="PCA")
+  config = TrainConfig(tasks=("a",), **{**paper.SCALES["ci"].train, "steps": 1},
+                       **synergies.frozen_fields(synergies.read(source)[0], source))
+  loop.train(config, tmp_path / "run", trainer=make_trainer(config), progress=False, log=lambda *a: None)
+  source.unlink()
+  with pytest.raises(ValueError, match="does not exist"):
+    make_trainer(config).init()
+  out = loop.train(config.replace(steps=2), tmp_path / "run", resume=True, progress=False,
+                   trainer=make_trainer(config.replace(steps=2)), log=lambda *a: None)
+  assert int(out["state"].step) == 2
+  np.testing.assert_array_equal(final_decoder(tmp_path / "run")["synergies.kernel"],
+                                params["synergies"]["kernel"])
 
 
 def test_transfer_from_a_given_decoder(experiments, tmp_path):
