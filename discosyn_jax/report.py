@@ -42,6 +42,8 @@ PAPER_PCA_VARIANCE = {"set1": {3: 0.415, 4: 0.508, 6: 0.628}}
 METHOD_ORDER = ("PPO", "PCA4", "AE4", "PCA6", "AE6", "DiscoSyn3-L", "DiscoSyn3-NL", "DiscoSyn4-L",
                 "DiscoSyn4-NL", "DiscoSyn6-L", "DiscoSyn6-NL")
 MAIN_EXPERIMENTS = ("discosyn", "baselines")
+EXPERIMENT_FILE = "experiment.json"  # in a run folder: experiment, method, set, seed, scale
+FIT_FILE = "explained_variance.json"  # in a folder of synergy files: what the fits explain
 
 
 def _rows(path: pathlib.Path) -> list[dict[str, Any]]:
@@ -59,6 +61,12 @@ class Run:
   seed: int
   evals: list[dict[str, Any]]
   finished: bool
+  scale: str | None  # None for a run `discosyn experiment` did not make
+
+  @property
+  def main(self) -> bool:
+    """A run of the solved tables (DiscoSyn or a baseline), not transfer or sparse."""
+    return self.experiment.split("-")[0] in MAIN_EXPERIMENTS or self.experiment == "train"
 
   @property
   def final(self) -> dict[str, Any]:
@@ -92,12 +100,14 @@ def _set_of(config: TrainConfig) -> str:
 
 def load_run(path: pathlib.Path) -> Run:
   config = config_lib.load(path / "config.json")
-  meta_file = path / "experiment.json"
+  meta_file = path / EXPERIMENT_FILE
   meta = json.loads(meta_file.read_text()) if meta_file.is_file() else {}
+  # derived from the config only where experiment.json is silent (_method_of may read a file)
   return Run(path=path, config=config, experiment=meta.get("experiment", "train"),
-             method=meta.get("method", _method_of(config)), task_set=meta.get("set", _set_of(config)),
+             method=meta["method"] if "method" in meta else _method_of(config),
+             task_set=meta["set"] if "set" in meta else _set_of(config),
              seed=meta.get("seed", config.seed), evals=_rows(path / logs.EVAL_FILE),
-             finished=(path / "final").is_dir())
+             finished=(path / "final").is_dir(), scale=meta.get("scale"))
 
 
 def find(paths) -> tuple[list[Run], list[dict[str, Any]]]:
@@ -108,8 +118,8 @@ def find(paths) -> tuple[list[Run], list[dict[str, Any]]]:
       raise ValueError(f"{path} is not a folder")
     if (path / "config.json").is_file():
       runs.append(load_run(path))
-    elif (path / "explained_variance.json").is_file():
-      fits.append(json.loads((path / "explained_variance.json").read_text()))
+    elif (path / FIT_FILE).is_file():
+      fits.append(json.loads((path / FIT_FILE).read_text()))
     else:
       inner = sorted(p for p in path.iterdir() if p.is_dir())
       found = find(inner) if inner else ([], [])
@@ -142,7 +152,7 @@ def _order(methods) -> list[str]:
 
 def solved_tables(runs: list[Run], threshold: float) -> str:
   lines = []
-  main = [r for r in runs if r.experiment.split("-")[0] in MAIN_EXPERIMENTS or r.experiment == "train"]
+  main = [r for r in runs if r.main]
   for task_set in sorted({r.task_set for r in main}):
     in_set = [r for r in main if r.task_set == task_set]
     task_names = list(in_set[0].config.tasks)
@@ -301,12 +311,11 @@ def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = Tr
            f"A task is *solved* when the mean over seeds of the final deterministic evaluation's "
            f"success is at least {threshold:.0%}. Cells: mark, mean success, ± standard deviation "
            "over seeds, [seeds], and the paper's mark (Tables I and II).", ""]
-  scales = sorted({json.loads((r.path / "experiment.json").read_text()).get("scale", "?")
-                   for r in runs if (r.path / "experiment.json").is_file()})
+  scales = sorted({r.scale for r in runs if r.scale})
   if scales:
     lines += [f"Scales: {', '.join(scales)}.", ""]
 
-  main = [r for r in runs if r.experiment.split("-")[0] in MAIN_EXPERIMENTS or r.experiment == "train"]
+  main = [r for r in runs if r.main]
   if main:
     lines += ["## Tasks solved", "", solved_tables(runs, threshold)]
   if fits:

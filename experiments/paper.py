@@ -29,7 +29,7 @@ import jax
 import numpy as np
 
 from discosyn_jax import config as config_lib
-from discosyn_jax import loop, synergies
+from discosyn_jax import loop, report, synergies
 from discosyn_jax.config import TrainConfig
 from experiments import presets
 
@@ -80,7 +80,7 @@ class Train:
     resume = (run_dir / loop.CONFIG_FILE).is_file()
     loop.train(self.config, run_dir, resume=resume, progress=progress,
                trainer=make_trainer(self.config), log=log)
-    (run_dir / "experiment.json").write_text(json.dumps(self.meta, indent=1))
+    (run_dir / report.EXPERIMENT_FILE).write_text(json.dumps(self.meta, indent=1))
 
 
 @dataclasses.dataclass
@@ -94,7 +94,7 @@ class Fit:
   meta: dict[str, Any]
 
   def done(self, out: pathlib.Path) -> bool:
-    return (out / self.name / "explained_variance.json").is_file()
+    return (out / self.name / report.FIT_FILE).is_file()
 
   def run(self, out: pathlib.Path, make_trainer, progress: bool, log) -> None:
     trainer, state = loop.load_trained(out / self.source, make_trainer)
@@ -111,18 +111,24 @@ class Fit:
       if k > min(actions.shape):
         log(f"{self.name}: {actions.shape[0]} actions are too few for {k} synergies; skipped")
         continue
-      for method, fit, decoder in (
-          ("PCA", lambda: synergies.fit_pca(actions, k), "linear"),
+      for method, fit in (
+          ("PCA", lambda: synergies.fit_pca(actions, k)),
           ("AE", lambda: synergies.fit_autoencoder(actions, k, self.hidden,
-                                                   steps=self.autoencoder_steps, seed=config.seed), "mlp")):
+                                                   steps=self.autoencoder_steps, seed=config.seed))):
         params, ev = fit()
-        fields = dict(decoder=decoder, n_synergies=k, decoder_bias=True, decoder_hidden=self.hidden)
-        synergies.save(folder / f"{method.lower()}{k}.npz", params, fields, method=method,
+        synergies.save(folder / f"{method.lower()}{k}.npz", params,
+                       fitted_meta(method, k, self.hidden), method=method,
                        explained_variance=ev, source=self.source)
         variance[method][str(k)] = ev
         log(f"{self.name}: {method}{k} explains {ev:.1%} of the action variance")
     # written last: its presence marks the step done
-    (folder / "explained_variance.json").write_text(json.dumps(variance, indent=1))
+    (folder / report.FIT_FILE).write_text(json.dumps(variance, indent=1))
+
+
+def fitted_meta(method: str, k: int, hidden: tuple[int, ...]) -> dict[str, Any]:
+  """The meta of a fitted synergy file: the decoder it is, and the method that made it."""
+  return dict(decoder="linear" if method == "PCA" else "mlp", n_synergies=k, decoder_bias=True,
+              decoder_hidden=hidden, method=method)
 
 
 # -- plans ---------------------------------------------------------------------
@@ -168,9 +174,8 @@ class Planner:
                                                           self.scale))
     steps = [ppo, fit]
     for method, k in BASELINES:
-      meta = dict(decoder="linear" if method == "PCA" else "mlp", n_synergies=k,
-                  decoder_bias=True, decoder_hidden=hidden, method=method)  # as Fit writes it
-      frozen = synergies.frozen_fields(meta, self.out / fit.name / f"{method.lower()}{k}.npz")
+      frozen = synergies.frozen_fields(fitted_meta(method, k, hidden),
+                                       self.out / fit.name / f"{method.lower()}{k}.npz")
       config = self._config(ppo.config, self.sets[task_set], init_z_std=1.0, **frozen)
       steps.append(Train(self._folder(f"{method}{k}", task_set), config,
                          _meta(experiment, f"{method}{k}", task_set, self.seed, self.scale)))
