@@ -79,8 +79,35 @@ def load_run(path: pathlib.Path) -> tuple[TrainConfig, pathlib.Path]:
   return config, checkpoint
 
 
+def initial_decoder(config: TrainConfig):
+  """The decoder params a fresh run of `config` starts from: its `decoder_from`, else None
+  (the Trainer's random initialisation)."""
+  if not config.decoder_from:
+    return None
+  from discosyn_jax import synergies
+
+  return synergies.load_decoder(config.decoder_from, config)
+
+
+def decoder_reference(trainer: Trainer, state: TrainState, log=print):
+  """The parameters whose decoder a run's movement is measured from: its initial decoder
+  (for a frozen one, the decoder itself). None without a decoder, or when a fine-tuned
+  decoder's source is gone."""
+  config = trainer.config
+  if trainer.decoder_drift is None:
+    return None
+  if config.freeze_decoder:
+    return jax.tree.map(lambda x: x.copy(), state.params)  # train_step donates the state
+  try:
+    return trainer.initial_params(decoder_params=initial_decoder(config))
+  except ValueError as e:
+    log(f"no decoder movement in the logs: {e}")
+    return None
+
+
 def restore(trainer: Trainer, checkpoint: pathlib.Path) -> TrainState:
-  return checkpoints.restore(checkpoint, trainer.init(load_decoder=False))
+  # the template needs no decoder source: the checkpoint holds the decoder
+  return checkpoints.restore(checkpoint, trainer.init())
 
 
 def load_trained(path: pathlib.Path, make_trainer=Trainer, **changes) -> tuple[Trainer, TrainState]:
@@ -122,8 +149,9 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, f
     state = restore(trainer, checkpoint)
     log(f"resumed from {checkpoint} at step {int(state.step)}")
   else:
-    state = trainer.init()
+    state = trainer.init(decoder_params=initial_decoder(config))
   start_step = int(state.step)
+  reference = decoder_reference(trainer, state, log)
 
   start = time.perf_counter()
   train_step = trainer.train_step.lower(state).compile()
@@ -140,6 +168,8 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, f
     tick = time.perf_counter()
     while int(state.step) < config.steps:
       state, metrics = train_step(state)
+      if reference is not None:
+        metrics.update(trainer.decoder_drift(reference, state.params))
       metrics = {k: float(v) for k, v in jax.device_get(metrics).items()}
       for name in config.tasks:  # no episode ended in this rollout: no return or success to log
         if metrics.get(f"{name}/episodes") == 0:

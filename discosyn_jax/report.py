@@ -39,8 +39,9 @@ PAPER_SOLVED = {
              "DiscoSyn4-NL": "1111", "DiscoSyn6-L": "1111", "DiscoSyn6-NL": "1111"},
 }
 PAPER_PCA_VARIANCE = {"set1": {3: 0.415, 4: 0.508, 6: 0.628}}
-METHOD_ORDER = ("PPO", "PCA4", "AE4", "PCA6", "AE6", "DiscoSyn3-L", "DiscoSyn3-NL", "DiscoSyn4-L",
-                "DiscoSyn4-NL", "DiscoSyn6-L", "DiscoSyn6-NL")
+METHOD_ORDER = ("PPO", "PCA4", "AE4", "PCA6", "AE6")
+for _b in (3, 4, 6):  # each DiscoSyn row above its random-decoder control
+  METHOD_ORDER += tuple(f"{m}{_b}-{k}" for k in ("L", "NL") for m in ("DiscoSyn", "Random"))
 MAIN_EXPERIMENTS = ("discosyn", "baselines")
 EXPERIMENT_FILE = "experiment.json"  # in a run folder: experiment, method, set, seed, scale
 FIT_FILE = "explained_variance.json"  # in a folder of synergy files: what the fits explain
@@ -140,7 +141,7 @@ def _cell(values: np.ndarray, threshold: float, paper: str | None) -> str:
     return "–"
   mean = values.mean()
   mark = "✓" if mean >= threshold else "✗"
-  spread = f" ± {values.std():.0%}" if values.size > 1 else ""
+  spread = f" ({values.min():.0%}–{values.max():.0%})" if values.size > 1 else ""
   paper_mark = "" if paper is None else f" (paper {'✓' if paper == '1' else '✗'})"
   return f"{mark} {mean:.0%}{spread} [{values.size}]{paper_mark}"
 
@@ -198,6 +199,30 @@ def variance_table(fits: list[dict[str, Any]]) -> str:
       lines.append(f"| {task_set} | {method} | " + " | ".join(cells) + f" | {samples} |")
   lines.append("| any | DiscoSyn | " + " | ".join("100% (by construction)" for _ in sizes) + " | |")
   return "\n".join(lines) + "\n"
+
+
+def decoder_table(runs: list[Run], last: int = 10) -> str:
+  """Is the synergy space learned? Per run with a decoder: its movement from the initial
+  decoder at the end (diagnostics.py), the gradient norms of decoder and heads, and the
+  discriminator's bonus beside the env's reward per step (means over the last `last` logged
+  train steps)."""
+  lines = ["| run | env steps | W change | principal cosines | decoder / heads grad norm "
+           "| bonus / reward per step |", "|---|---|---|---|---|---|"]
+  for run in sorted(runs, key=lambda r: (r.task_set, r.method, r.seed)):
+    rows = [r for r in _rows(run.path / logs.METRICS_FILE) if "decoder/change" in r][-last:]
+    if not rows:
+      continue
+    end = rows[-1]
+    cosines = " / ".join(f"{end[f'decoder/cos_{k}']:.3f}"
+                         for k in range(1, run.config.n_synergies + 1) if f"decoder/cos_{k}" in end)
+    mean = lambda key: float(np.mean([r.get(key, np.nan) for r in rows]))
+    tasks = run.config.tasks
+    bonus = np.mean([mean(f"{t}/bonus") for t in tasks])
+    reward = np.mean([mean(f"{t}/reward") for t in tasks])
+    lines.append(f"| {run.method} {run.task_set} seed {run.seed} | {end['env_steps']:,.0f} | "
+                 f"{end['decoder/change']:.1%} | {cosines} | {mean('grad_norm/decoder'):.3g} / "
+                 f"{mean('grad_norm/heads'):.3g} | {bonus:.3f} / {reward:.3f} |")
+  return "\n".join(lines) + "\n" if len(lines) > 2 else ""
 
 
 def first_reward(run: Run, task: str) -> tuple[int, int] | None:
@@ -309,8 +334,8 @@ def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = Tr
            f"{len(runs)} runs and {len(fits)} synergy fits from: "
            + ", ".join(f"`{p}`" for p in paths) + ".",
            f"A task is *solved* when the mean over seeds of the final deterministic evaluation's "
-           f"success is at least {threshold:.0%}. Cells: mark, mean success, ± standard deviation "
-           "over seeds, [seeds], and the paper's mark (Tables I and II).", ""]
+           f"success is at least {threshold:.0%}. Cells: mark, mean success, (min–max "
+           "over seeds), [seeds], and the paper's mark (Tables I and II).", ""]
   scales = sorted({r.scale for r in runs if r.scale})
   if scales:
     lines += [f"Scales: {', '.join(scales)}.", ""]
@@ -330,6 +355,14 @@ def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = Tr
     name = f"curves-{task_set}.png".replace("+", "_")
     curves(group, out / name, f"{task_set}: deterministic evaluation success")
     lines += [f"![{task_set}]({name})", ""]
+
+  movement = decoder_table(runs)
+  if movement:
+    lines += ["## Is the synergy space learned?", "",
+              "The decoder's synergy basis (linear: W; MLP: its Jacobian at z = 0) against the "
+              "one it started from: relative change, and the cosines of the principal angles "
+              "between the two subspaces (1: the same subspace). A frozen decoder shows 0 and 1.",
+              "", movement]
 
   if with_tsne and any(r.method.startswith("DiscoSyn") for r in main):
     lines += ["## t-SNE of the low-dimensional actions", ""]

@@ -201,12 +201,15 @@ def load_decoder(path, config) -> dict:
 
 
 def method_name(meta) -> str:
-  """The paper's name of a synergy model: 'PCA4', 'AE6', 'DiscoSyn3-L', 'DiscoSyn4-NL'.
+  """The paper's name of a synergy model: 'PCA4', 'AE6', 'DiscoSyn3-L', 'DiscoSyn4-NL', and
+  'Random3-L' for the control (a decoder frozen at its random initialisation).
   `meta` is a synergy file's meta, or anything with the ARCHITECTURE fields (a config)."""
   get = meta.get if isinstance(meta, dict) else lambda k, d=None: getattr(meta, k, d)
   if get("method"):
     return f"{get('method')}{get('n_synergies')}"
-  return f"DiscoSyn{get('n_synergies')}-{'L' if get('decoder') == 'linear' else 'NL'}"
+  # a config whose decoder is frozen at its own random initialisation: DiscoSyn's control
+  kind = "Random" if get("freeze_decoder") and not get("decoder_from") else "DiscoSyn"
+  return f"{kind}{get('n_synergies')}-{'L' if get('decoder') == 'linear' else 'NL'}"
 
 
 def frozen_fields(meta: dict[str, Any], path) -> dict[str, Any]:

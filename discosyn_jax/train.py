@@ -17,6 +17,7 @@ paper's Algorithm 1 fits q first, which differs by one update of q.
 
 from __future__ import annotations
 
+import functools
 from typing import Any, Sequence
 
 import jax
@@ -29,7 +30,7 @@ from flax import struct
 from jax.sharding import PartitionSpec as P
 
 from discosyn_jax import devices as devices_lib
-from discosyn_jax import networks, ppo, wrappers
+from discosyn_jax import diagnostics, networks, ppo, wrappers
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.networks import DiscoSyn, gaussian_log_prob
 
@@ -73,34 +74,46 @@ class Trainer:
     self.optimizer = ppo.optimizer(config)
     self._train = [wrappers.for_training(env) for env in self.envs]
     self._eval = [wrappers.for_evaluation(env) for env in self.envs]
+    self._fresh_state = jax.jit(self._initial_state)
+    # the decoder's movement from a reference (diagnostics.py); None without a decoder
+    self.decoder_drift = (jax.jit(functools.partial(diagnostics.decoder_drift, self.model))
+                          if self.model.has_discriminator else None)
     self.train_step = jax.jit(self._train_step, donate_argnums=0)
     self.evaluate = jax.jit(self._evaluate)
     # the evaluation's episodes of one task, with their states: `discosyn render`
     self.episodes = jax.jit(self._episodes, static_argnames=("task", "episodes", "keep_states"))
 
   # -- state -----------------------------------------------------------------
-  def init(self, seed: int | None = None, decoder_params=None,
-           load_decoder: bool = True) -> TrainState:
-    """A fresh state; `decoder_params` (or else the config's `decoder_from`) replaces the
-    initial decoder. `load_decoder=False` skips `decoder_from`: the template of a state a
-    checkpoint will fill, which needs no source decoder any more."""
+  def init(self, seed: int | None = None, decoder_params=None) -> TrainState:
+    """A fresh state; `decoder_params` replace the initial decoder (a fitted or learned
+    synergy space: the host side loads it, see `synergies.load_decoder`)."""
     key = jax.random.PRNGKey(self.config.seed if seed is None else seed)
-    key, init_key, *env_keys = jax.random.split(key, 2 + len(self.envs))
-    params = self.model.init(init_key, [jnp.zeros((1, s)) for s in self.obs_sizes])
-    if decoder_params is None and self.config.decoder_from and load_decoder:
-      from discosyn_jax import synergies
+    # one jitted function: MJX run op by op (eagerly) takes minutes per reset
+    state = self._fresh_state(key, decoder_params)
+    return jax.device_put(state, self.state_shardings(state))
 
-      decoder_params = synergies.load_decoder(self.config.decoder_from, self.config)
+  def initial_params(self, seed: int | None = None, decoder_params=None):
+    """The parameters `init(seed, decoder_params)` starts from, without building envs."""
+    key = jax.random.PRNGKey(self.config.seed if seed is None else seed)
+    params = jax.jit(self._init_params)(jax.random.split(key, 2 + len(self.envs))[1])
+    return params if decoder_params is None else _with_decoder(params, decoder_params)
+
+  def _init_params(self, key):
+    return self.model.init(key, [jnp.zeros((1, s)) for s in self.obs_sizes])
+
+  def _initial_state(self, key, decoder_params) -> TrainState:
+    key, init_key, *env_keys = jax.random.split(key, 2 + len(self.envs))
+    params = self._init_params(init_key)
     if decoder_params is not None:
       params = _with_decoder(params, decoder_params)
     envs = tuple(env.reset(jax.random.split(k, self.config.num_envs))
                  for env, k in zip(self._train, env_keys))
     norms = tuple(running_statistics.init_state(jnp.zeros((s,))) for s in self.obs_sizes)
+    # every leaf an array of the dtype train_step returns: one compiled signature, one
+    # checkpoint layout
     state = TrainState(params=params, opt_state=self.optimizer.init(params), normalizers=norms,
                        env_states=envs, rng=key, step=jnp.zeros((), jnp.int32))
-    # every leaf an array laid out as train_step returns it: one compiled signature, one
-    # checkpoint layout
-    return jax.device_put(jax.tree.map(jnp.asarray, state), self.state_shardings(state))
+    return jax.tree.map(lambda x: jnp.asarray(x, dtype=jnp.asarray(x).dtype), state)
 
   def state_shardings(self, state: TrainState):
     """Env states split over the mesh on their env axis; everything else replicated (and
@@ -199,7 +212,7 @@ class Trainer:
                                  target=flat(target)))
       env_states.append(env_state)
       norms.append(norm)
-      metrics.update({f"{name}/{k}": v for k, v in _episode_metrics(traj, log_q).items()})
+      metrics.update({f"{name}/{k}": v for k, v in _episode_metrics(traj, log_q, cfg.alpha2).items()})
 
     params, opt_state, loss_metrics = self._update(params, state.opt_state, samples, update_key)
     for n, name in enumerate(cfg.tasks):
@@ -225,7 +238,7 @@ class Trainer:
       params, opt_state = carry
       grads, (per_task, shared) = grad_fn(params, self.model, batch, cfg)
       updates, opt_state = self.optimizer.update(grads, opt_state, params)
-      shared = dict(shared, grad_norm=optax.tree.norm(grads))
+      shared = dict(shared, grad_norm=optax.tree.norm(grads), **_grad_norms_by_role(grads))
       return (optax.apply_updates(params, updates), opt_state), {"tasks": per_task, "shared": shared}
 
     def epoch(carry, key):
@@ -291,8 +304,9 @@ class Trainer:
             for n, name in enumerate(self.config.tasks)}
 
 
-def _episode_metrics(traj, log_q) -> dict[str, jax.Array]:
-  """Per-task figures of one rollout: episodes that ended in it, and per-step means."""
+def _episode_metrics(traj, log_q, alpha2) -> dict[str, jax.Array]:
+  """Per-task figures of one rollout: episodes that ended in it, and per-step means; `reward`
+  is the env's reward, `bonus` the alpha2 log q(z|a) added to it (after reward_scaling)."""
   done = traj["done"]
   episodes = done.sum()
   per_episode = lambda x: (x * done).sum() / jnp.maximum(episodes, 1)
@@ -303,9 +317,20 @@ def _episode_metrics(traj, log_q) -> dict[str, jax.Array]:
   first_paid = jnp.where(paid.any(), jnp.argmax(paid), paid.shape[0])
   out = {"episodes": episodes, "return": per_episode(traj["episode_return"]),
          "success": per_episode(m["success"]), "diverged": m["diverged"].sum(),
-         "reward": traj["reward"].mean(), "first_reward_t": first_paid, "log_q": log_q.mean()}
+         "reward": traj["reward"].mean(), "first_reward_t": first_paid, "log_q": log_q.mean(),
+         "bonus": alpha2 * log_q.mean()}
   out.update({k: v.mean() for k, v in m.items() if k.startswith("reward/")})
   return out
+
+
+def _grad_norms_by_role(grads) -> dict[str, jax.Array]:
+  """The loss gradient's norm per part of the module (before clipping): the heads (policy
+  means and stds), the value heads, the decoder, the discriminator."""
+  parts: dict[str, list] = {}
+  for name, sub in grads["params"].items():
+    part = "values" if name.startswith("values_") else networks.role(name)
+    parts.setdefault("heads" if part == "policy" else part, []).append(sub)
+  return {f"grad_norm/{part}": optax.tree.norm(subs) for part, subs in parts.items()}
 
 
 def _with_decoder(params, decoder_params):

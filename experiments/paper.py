@@ -1,6 +1,8 @@
 """The paper's experiments as plans of steps, each at a scale: `discosyn experiment NAME`.
 
-  discosyn-set1 / -set2  DiscoSyn<b>-L and -NL (Tables I and II)
+  discosyn-set1 / -set2  DiscoSyn<b>-L and -NL (Tables I and II), each followed by its
+                         control Random<b>-L / -NL: the same run with the decoder frozen
+                         at its random initialisation (what the learned decoder must beat)
   baselines-set1 / -set2 the sequential baseline: independent full-action PPO per task (one
                          run, one head and one value net per task, no shared parameters),
                          its deterministic actions collected, PCA and an autoencoder fitted
@@ -9,7 +11,8 @@
   transfer               unseen tasks with a frozen DiscoSyn decoder (set #1's DiscoSyn3-L
                          for the two valves, set #2's DiscoSyn6-L for the top-down screw),
                          beside full-action PPO from scratch on the same tasks and budget
-  sparse                 the sparse goal valve, frozen set-#1 synergies vs full-action PPO
+  sparse                 the sparse goal valve: frozen set-#1 synergies, a frozen random
+                         decoder of the same size, full-action PPO
   all                    every one of them
 
 Every step writes into its own folder of OUT (`<method>-<set>-seed<n>`). A step whose folder
@@ -160,6 +163,17 @@ class Planner:
     return Train(self._folder(method, task_set), config,
                  _meta(f"discosyn-{task_set}", method, task_set, self.seed, self.scale))
 
+  def random_decoder(self, learned: Train, task_set: str, experiment: str) -> Train:
+    """The control of a DiscoSyn run (or a frozen learned space): the same config with its
+    decoder frozen at its random initialisation (the decoder the DiscoSyn run of this seed
+    starts from, whatever the tasks)."""
+    config = learned.config.replace(freeze_decoder=True, decoder_from="").validate()
+    method = synergies.method_name(config)
+    label = task_set.removeprefix("unseen-")
+    name = (f"{experiment}-random-seed{self.seed}" if label == experiment
+            else self._folder(method, task_set))
+    return Train(name, config, _meta(experiment, method, task_set, self.seed, self.scale))
+
   def ppo(self, task_set: str, experiment: str) -> Train:
     base = presets.preset("set1-ppo")  # the same PPO settings for every set
     return Train(self._folder("PPO", task_set), self._config(base, self.sets[task_set]),
@@ -201,7 +215,10 @@ class Planner:
                    _meta(experiment, f"{method} frozen", task_set, self.seed, self.scale))
     scratch = self.ppo(task_set, experiment)
     scratch = dataclasses.replace(scratch, name=folder("ppo"))
-    return [step for step in (source, frozen, scratch) if step is not None]
+    control = None
+    if experiment == "sparse":  # the learned space against a random one of the same size
+      control = self.random_decoder(frozen, task_set, experiment)
+    return [step for step in (source, frozen, control, scratch) if step is not None]
 
   def plan(self, experiment: str) -> list:
     if experiment == "all":
@@ -212,8 +229,10 @@ class Planner:
       return steps
     if experiment.startswith("discosyn-") and experiment[9:] in DISCOSYN_SIZES:
       task_set = experiment[9:]
-      return [self.discosyn(task_set, b, kind) for b in DISCOSYN_SIZES[task_set]
+      runs = [self.discosyn(task_set, b, kind) for b in DISCOSYN_SIZES[task_set]
               for kind in ("linear", "mlp")]
+      return [step for run in runs
+              for step in (run, self.random_decoder(run, task_set, experiment))]
     if experiment.startswith("baselines-") and experiment[10:] in DISCOSYN_SIZES:
       return self.baselines(experiment[10:])
     if experiment == "transfer":

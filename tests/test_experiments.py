@@ -154,6 +154,26 @@ def test_sparse_and_transfer_keep_the_source_decoder(experiments):
   assert all("g/first_reward_t" in row for row in rows)
 
 
+def test_the_random_decoder_control_keeps_the_learned_runs_initial_decoder(experiments):
+  control = experiments / "sparse-random-seed0"
+  meta = json.loads((control / "experiment.json").read_text())
+  assert meta["method"] == "Random3-L" and meta["experiment"] == "sparse"
+  config = loop.load_run(control)[0]
+  frozen = loop.load_run(experiments / "sparse-synergies-seed0")[0]
+  assert config == frozen.replace(decoder_from="")  # only the decoder's source differs
+  learned = loop.load_run(experiments / "discosyn3-l-set1-seed0")[0]
+  start = make_trainer(learned).initial_params()["params"]["synergy_decoder"]
+  trained = final_decoder(control)
+  np.testing.assert_array_equal(trained["synergies.kernel"], start["synergies"]["kernel"])
+  # the discosyn experiment pairs every DiscoSyn run with its control
+  steps = paper.Planner(experiments, "ci", 0, SETS).plan("discosyn-set1")
+  names = [s.config and synergies.method_name(s.config) for s in steps]
+  assert names == ["DiscoSyn3-L", "Random3-L", "DiscoSyn3-NL", "Random3-NL", "DiscoSyn4-L",
+                   "Random4-L", "DiscoSyn4-NL", "Random4-NL"]
+  assert all(s.config.replace(freeze_decoder=False) == r.config
+             for r, s in zip(steps[::2], steps[1::2]))
+
+
 def test_finished_steps_are_kept(experiments):
   final = experiments / "pca4-set1-seed0" / "final"
   before = final.stat().st_mtime_ns
@@ -198,7 +218,7 @@ def test_report_mean_and_spread_over_seeds(tmp_path):
     (run / "eval.jsonl").write_text(json.dumps(row) + "\n")
   runs, _ = report.find([tmp_path])
   table = report.solved_tables(runs, threshold=0.7)
-  assert "| DiscoSyn3-L | ✓ 75% ± 25% [2] (paper ✓) |" in table
+  assert "| DiscoSyn3-L | ✓ 75% (50%–100%) [2] (paper ✓) |" in table
   assert "4/4 (paper 4/4)" in table
   assert "✗" in report.solved_tables(runs, threshold=0.8)
 
@@ -227,7 +247,7 @@ def test_a_frozen_run_resumes_without_its_decoder_source(experiments, tmp_path):
   loop.train(config, tmp_path / "run", trainer=make_trainer(config), progress=False, log=lambda *a: None)
   source.unlink()
   with pytest.raises(ValueError, match="does not exist"):
-    make_trainer(config).init()
+    loop.initial_decoder(config)
   out = loop.train(config.replace(steps=2), tmp_path / "run", resume=True, progress=False,
                    trainer=make_trainer(config.replace(steps=2)), log=lambda *a: None)
   assert int(out["state"].step) == 2

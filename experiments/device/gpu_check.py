@@ -1,0 +1,210 @@
+"""The prepared GPU check: one call on a bare device machine measures the GPU path end to end.
+
+  bash experiments/device/wheels.sh          # here, once: the wheels the device image lacks
+  # on the device (docs/SCALING.md has the exact call):
+  python3 experiments/device/gpu_check.py --budget-s 420 --out $OUT
+
+In order, each result one JSON line in OUT/gpu_check.jsonl as soon as it is measured (a run
+cut short keeps what it measured):
+  versions   python, jax, mujoco, mujoco-mjx, brax, the devices
+  init       Trainer build, `init()`, and the compile of the train step and of the evaluation
+             for PRESET at SCALE (the training this check then runs)
+  physics    MJX env (control) steps/s of the jitted, vmapped `HandEnv.step` in a scan of
+             --physics-steps steps, for every task of the preset at every --batches, and for
+             valve3 at 8192 envs under each of experiments/mjx_settings.SETTINGS (the modules
+             compile in parallel threads: the machine has many cores, the clock is short)
+  train      one line per train step: env steps, wall seconds, env steps/s, training success
+  eval       deterministic success and return per task every --eval-every train steps and at
+             the end, until --budget-s (counted from the start) runs out
+"""
+
+from __future__ import annotations
+
+import argparse
+import concurrent.futures
+import json
+import os
+import pathlib
+import platform
+import subprocess
+import sys
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+
+import jax  # noqa: E402
+import jax.numpy as jnp  # noqa: E402
+
+import tasks  # noqa: E402
+from discosyn_jax.train import Trainer  # noqa: E402
+from experiments import mjx_settings, paper, presets  # noqa: E402
+
+
+class Log:
+  """JSON lines to a file, each also printed; flushed at once."""
+
+  def __init__(self, path: pathlib.Path):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    self.file = open(path, "a")
+
+  def __call__(self, what: str, **row):
+    line = json.dumps({"what": what, **row})
+    print(line, flush=True)
+    self.file.write(line + "\n")
+    self.file.flush()
+
+
+def versions() -> dict:
+  import brax
+  import mujoco
+  from importlib import metadata
+
+  try:
+    gpu = subprocess.run(["nvidia-smi", "--query-gpu=name,memory.total,driver_version",
+                          "--format=csv,noheader"], capture_output=True, text=True,
+                         timeout=30).stdout.strip()
+  except (OSError, subprocess.SubprocessError):
+    gpu = None
+  return dict(python=platform.python_version(), jax=jax.__version__, mujoco=mujoco.__version__,
+              mjx=metadata.version("mujoco-mjx"), brax=brax.__version__,
+              devices=[str(d) for d in jax.devices()], backend=jax.default_backend(),
+              gpu=gpu, cpus=os.cpu_count())
+
+
+def timed(fn):
+  start = time.perf_counter()
+  out = fn()
+  jax.block_until_ready(out)
+  return out, time.perf_counter() - start
+
+
+def physics_modules(names, batches, settings, steps: int):
+  """[(label, lowered scan, its arguments)] for every task x batch, and valve3 at the largest
+  batch but one under each of `settings` (experiments/mjx_settings.py)."""
+  jobs = [(dict(task=name, batch=batch, setting="scene"), tasks.make(name, backend="mjx"))
+          for name in names for batch in batches]
+  for setting in settings:
+    opt, substeps = mjx_settings.SETTINGS[setting]
+    env = mjx_settings.with_settings("valve3", opt, substeps, None)
+    jobs.append((dict(task="valve3", batch=sorted(batches)[-2:][0], setting=setting), env))
+  out = []
+  for label, env in jobs:
+    batch = label["batch"]
+    actions = jax.random.uniform(jax.random.PRNGKey(1), (steps, batch, env.action_size),
+                                 minval=-1, maxval=1)
+    step = jax.vmap(env.step)
+
+    def run(key, actions, env=env, step=step, batch=batch):
+      # one env reset and copied: every compile (reset included) runs in the thread pool;
+      # the one reset is negligible beside batch x steps steps
+      one = env.reset(key)
+      state = jax.tree.map(lambda x: jnp.broadcast_to(x, (batch,) + x.shape), one)
+      return jax.lax.scan(lambda s, a: (step(s, a), None), state, actions)[0].obs
+
+    args = (jax.random.PRNGKey(0), actions)
+    out.append((label, jax.jit(run).lower(*args), args))
+  return out
+
+
+def measure_physics(log: Log, names, batches, settings, steps: int, threads: int):
+  start = time.perf_counter()
+  modules = physics_modules(names, batches, settings, steps)
+  traced = time.perf_counter() - start
+
+  def compile_one(module):
+    t = time.perf_counter()
+    return module.compile(), time.perf_counter() - t
+
+  with concurrent.futures.ThreadPoolExecutor(threads) as pool:
+    compiled = list(pool.map(compile_one, [m for _, m, _ in modules]))
+  log("physics_compile", modules=len(modules), trace_s=traced,
+      wall_s=time.perf_counter() - start, threads=threads)
+  for (label, _, args), (run, compile_s) in zip(modules, compiled):
+    jax.block_until_ready(run(*args))  # warm-up
+    _, seconds = timed(lambda: run(*args))
+    log("physics", **label, steps=steps, compile_s=compile_s,
+        env_steps_per_s=label["batch"] * steps / seconds)
+
+
+def main(argv=None):
+  parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  parser.add_argument("--preset", default="set1-disco3-linear", help="the training preset")
+  parser.add_argument("--scale", default="gpu", choices=list(paper.SCALES),
+                      help="sizes of the training (experiments/paper.py SCALES)")
+  parser.add_argument("--backend", default="mjx", choices=["mjx", "native"],
+                      help="physics of the training (native: a CPU dry run)")
+  parser.add_argument("--batches", type=int, nargs="+", default=[2048, 8192, 16384],
+                      help="envs per task of the physics timings")
+  parser.add_argument("--settings", nargs="*", choices=list(mjx_settings.SETTINGS),
+                      default=[s for s in mjx_settings.SETTINGS if not s.startswith("scene")],
+                      help="MJX settings timed on valve3 beside the scene's (none: skip)")
+  parser.add_argument("--physics-steps", type=int, default=20, help="control steps per timing")
+  parser.add_argument("--no-physics", dest="physics", action="store_false",
+                      help="skip the physics timings (CPU dry runs)")
+  parser.add_argument("--threads", type=int, default=12, help="parallel compiles of the physics")
+  parser.add_argument("--eval-every", type=int, default=10, help="train steps between evaluations")
+  parser.add_argument("--budget-s", type=float, default=420.0,
+                      help="seconds from the start after which training stops (then a final eval)")
+  parser.add_argument("--final-eval-s", type=float, default=30.0,
+                      help="seconds kept back from the budget for the final evaluation")
+  parser.add_argument("--out", default=os.environ.get("OUT", "runs/gpu_check"),
+                      help="folder of gpu_check.jsonl (default: $OUT)")
+  args = parser.parse_args(argv)
+  start = time.perf_counter()
+  log = Log(pathlib.Path(args.out) / "gpu_check.jsonl")
+  log("versions", **versions())
+
+  sizes = paper.SCALES[args.scale].train
+  config = presets.preset(args.preset).replace(backend=args.backend, **sizes).validate()
+  trainer, build_s = timed(lambda: Trainer(config))
+  state, init_s = timed(trainer.init)
+  train_step, compile_s = timed(lambda: trainer.train_step.lower(state).compile())
+  log("init", preset=args.preset, scale=args.scale, backend=trainer.envs[0].backend,
+      num_envs=config.num_envs, env_steps_per_train_step=config.env_steps_per_train_step,
+      build_s=build_s, init_s=init_s, train_compile_s=compile_s,
+      init_plus_compile_s=init_s + compile_s)
+  key = jax.random.PRNGKey(0)
+  evaluate, eval_compile_s = timed(
+      lambda: trainer.evaluate.lower(state.params, state.normalizers, key).compile())
+  log("eval_compile", seconds=eval_compile_s, eval_envs=config.eval_envs)
+
+  if args.physics:
+    try:  # a failure here must not cost the training below its share of the call
+      measure_physics(log, config.tasks, args.batches, args.settings, args.physics_steps,
+                      args.threads)
+    except Exception as e:  # noqa: BLE001 - reported, then the check goes on
+      log("physics_failed", error=f"{type(e).__name__}: {e}"[:2000])
+
+  def run_eval(step):
+    key = jax.random.fold_in(jax.random.PRNGKey(config.seed + 1), step)
+    results, seconds = timed(lambda: evaluate(state.params, state.normalizers, key))
+    results = jax.tree.map(float, jax.device_get(results))
+    log("eval", step=step, env_steps=step * config.env_steps_per_train_step,
+        wall_s=time.perf_counter() - train_start, eval_s=seconds,
+        **{f"{n}/{k}": v for n, r in results.items() for k, v in r.items()})
+
+  train_start = time.perf_counter()
+  run_eval(0)
+  deadline = start + args.budget_s - args.final_eval_s
+  step = 0
+  while time.perf_counter() < deadline and step < config.steps:
+    tick = time.perf_counter()
+    state, metrics = train_step(state)
+    metrics = jax.device_get(metrics)
+    step += 1
+    seconds = time.perf_counter() - tick
+    log("train", step=step, env_steps=step * config.env_steps_per_train_step,
+        wall_s=time.perf_counter() - train_start,
+        env_steps_per_s=config.env_steps_per_train_step / seconds,
+        finite=bool(metrics["finite"]),
+        **{f"{n}/success": float(metrics[f"{n}/success"]) for n in config.tasks})
+    if step % args.eval_every == 0:
+      run_eval(step)
+  if step % args.eval_every:
+    run_eval(step)
+  log("done", total_s=time.perf_counter() - start, train_steps=step)
+
+
+if __name__ == "__main__":
+  main()

@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# The wheels the GPU device image lacks, for Python 3.12 on x86-64 Linux, in .whl/ (ignored by
+# git; the device tool carries it). The image already holds jax 0.11.2 (CUDA 13), flax,
+# optax, orbax-checkpoint, chex, numpy, scikit-learn, matplotlib, imageio, tqdm, absl-py and
+# etils. brax imports jaxopt (brax.generalized) and ml_collections at import time.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+grep -qx '/.whl/' .git/info/exclude 2>/dev/null || echo '/.whl/' >> .git/info/exclude
+WHEELS=(mujoco==4.0.0 mujoco-core==4.0.0 mujoco-mjx==3.17.0 brax==0.14.2 jaxopt==0.8.5
+        ml_collections==1.1.0 tensorboardX==2.6.5 trimesh==5.2.0)
+PYTHON="${PYTHON:-python3}"
+"$PYTHON" -m pip download -q --no-deps --only-binary=:all: --python-version 3.12 \
+  --implementation cp --platform manylinux_2_28_x86_64 --platform manylinux_2_27_x86_64 \
+  --platform manylinux_2_17_x86_64 --platform manylinux2014_x86_64 --platform manylinux1_x86_64 \
+  --platform any -d .whl "${WHEELS[@]}"
+du -ch .whl/*.whl | tail -1
