@@ -112,14 +112,20 @@ def fit_autoencoder(actions: np.ndarray, k: int, hidden=(128, 128), steps: int =
 
   code = np.asarray(model.apply(params, data, method=Autoencoder.encode))
   mean, std = code.mean(axis=0), np.maximum(code.std(axis=0), 1e-6)
-  decoder = jax.tree.map(np.asarray, params["params"]["decoder"])
-  first = decoder["MLP_0"]["Dense_0"]
-  # decoder(mean + std * z): fold the standardisation into the first layer
-  first["bias"] = (first["bias"] + mean @ first["kernel"]).astype(np.float32)
-  first["kernel"] = (std[:, None] * first["kernel"]).astype(np.float32)
+  decoder = standardised_input(params["params"]["decoder"], mean, std)
   reconstructed = np.asarray(model.apply(params, data))
   decoder["log_std"] = _residual_log_std(actions, reconstructed)
   return decoder, explained_variance(actions, reconstructed)
+
+
+def standardised_input(decoder: dict, mean: np.ndarray, std: np.ndarray) -> dict:
+  """An MLP decoder's params (GaussianHead layout) taking z = (code - mean) / std instead
+  of the code: decoder(mean + std * z), the scaling folded into its first layer."""
+  decoder = jax.tree.map(np.asarray, decoder)
+  first = decoder["MLP_0"]["Dense_0"]
+  first["bias"] = (first["bias"] + mean @ first["kernel"]).astype(np.float32)
+  first["kernel"] = (std[:, None] * first["kernel"]).astype(np.float32)
+  return decoder
 
 
 def decode(fields: dict[str, Any], params: dict, z: np.ndarray) -> np.ndarray:

@@ -202,10 +202,7 @@ class Trainer:
       value = self.model.apply(params, n, obs, method=DiscoSyn.value)
       bootstrap = self.model.apply(params, n, self._normalize(env_state.obs, norm),
                                    method=DiscoSyn.value)
-      termination = traj["done"] * (1 - traj["truncation"])
-      target, advantage = compute_gae(
-          truncation=traj["truncation"], termination=termination, rewards=reward,
-          values=value, bootstrap_value=bootstrap, lambda_=cfg.gae_lambda, discount=cfg.discount)
+      target, advantage = gae(reward, value, bootstrap, traj["done"], traj["truncation"], cfg)
       flat = lambda x: x.reshape((-1,) + x.shape[2:])
       samples.append(ppo.Samples(obs=flat(obs), z=flat(traj["z"]), action=flat(traj["action"]),
                                  log_prob=flat(traj["log_prob"]), advantage=flat(advantage),
@@ -302,6 +299,17 @@ class Trainer:
     return {name: jax.device_get(self.episodes(params, normalizers, keys[n], task=n,
                                                episodes=episodes)[0])
             for n, name in enumerate(self.config.tasks)}
+
+
+def gae(reward, value, bootstrap, done, truncation, config: TrainConfig):
+  """(value targets, advantages) of a (T, B) rollout, by brax's compute_gae. An episode
+  ends (`done`) by termination, with nothing after it, or by truncation at the time limit:
+  the auto-reset has already put the next episode's first observation after that step, so
+  brax leaves it out (advantage 0, target its own value)."""
+  termination = done * (1 - truncation)
+  return compute_gae(truncation=truncation, termination=termination, rewards=reward,
+                     values=value, bootstrap_value=bootstrap, lambda_=config.gae_lambda,
+                     discount=config.discount)
 
 
 def _episode_metrics(traj, log_q, alpha2) -> dict[str, jax.Array]:

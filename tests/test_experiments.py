@@ -10,10 +10,11 @@ import numpy as np
 import pytest
 from sklearn.decomposition import PCA
 
-from discosyn_jax import checkpoints, cli, logs, loop, report, synergies
+from discosyn_jax import checkpoints, cli, logs, loop, networks, report, synergies
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.train import Trainer, _episode_metrics
 from experiments import paper
+from tests import reference
 from tests.toy_env import ReachAction
 
 TARGET = np.linspace(-0.8, 0.8, 20)
@@ -73,6 +74,20 @@ def test_autoencoder_code_is_standardised_into_the_decoder():
     synergies.fit_autoencoder(actions, 30)
 
 
+def test_folding_the_code_standardisation_into_the_decoder_is_exact():
+  """decoder'(z) = decoder(mean + std z), through the decoder written in NumPy."""
+  rng = np.random.default_rng(0)
+  shapes = jax.eval_shape(networks.GaussianHead((16, 16), 20, 1.0).init, jax.random.PRNGKey(0),
+                          np.zeros((1, 3)))["params"]
+  params = jax.tree.map(lambda s: rng.normal(size=s.shape).astype(np.float32), shapes)
+  mean, std = rng.normal(size=3), rng.uniform(0.2, 3.0, size=3)
+  z = rng.normal(size=(50, 3))
+  folded = reference.as_numpy(synergies.standardised_input(params, mean, std))
+  np.testing.assert_allclose(reference.gaussian_head(folded, z)[0],
+                             reference.gaussian_head(reference.as_numpy(params), mean + std * z)[0],
+                             rtol=1e-5, atol=1e-4)
+
+
 def test_synergy_file_round_trip_and_mismatch(tmp_path):
   params, ev = synergies.fit_pca(low_rank_actions(), 4)
   fields = dict(decoder="linear", n_synergies=4, decoder_bias=True, decoder_hidden=(128, 128))
@@ -96,9 +111,9 @@ def test_first_reward_step_is_logged():
   reward[3, 2] = 1.0
   traj = dict(done=np.zeros((6, 4)), reward=reward, episode_return=np.zeros((6, 4)),
               metrics={"success": np.zeros((6, 4)), "diverged": np.zeros((6, 4))})
-  assert int(_episode_metrics(traj, np.zeros((6, 4)))["first_reward_t"]) == 3
+  assert int(_episode_metrics(traj, np.zeros((6, 4)), 0.0)["first_reward_t"]) == 3
   traj["reward"] = np.zeros((6, 4))
-  assert int(_episode_metrics(traj, np.zeros((6, 4)))["first_reward_t"]) == 6
+  assert int(_episode_metrics(traj, np.zeros((6, 4)), 0.0)["first_reward_t"]) == 6
 
 
 def test_noiseless_decoder_acts_with_its_mean():

@@ -9,7 +9,7 @@ import pytest
 from discosyn_jax import networks, ppo
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.networks import DiscoSyn
-from discosyn_jax.train import Trainer
+from discosyn_jax.train import Trainer, _episode_metrics
 from tests.toy_env import ReachAction
 
 TARGET = np.linspace(-0.8, 0.8, 20)
@@ -172,6 +172,27 @@ def test_discriminator_likelihood_rises_on_a_fixed_batch():
   end = float(-nll(params))
   # z is nearly a linear function of a here: q must do far better than its start (~ -4.3)
   assert end > start + 3.0, (start, end)
+
+
+def test_episode_metrics_average_over_the_episodes_that_ended():
+  done = np.array([[0, 0, 1], [1, 0, 0], [0, 0, 1], [0, 1, 0]], np.float32)  # 4 episodes
+  garbage = np.full((4, 3), 100.0, np.float32)  # the values at steps that ended nothing
+  ended = lambda *values: np.where(done > 0, np.array(values, np.float32).reshape(4, 3), garbage)
+  traj = dict(done=done, reward=np.arange(12, dtype=np.float32).reshape(4, 3),
+              episode_return=ended(0, 0, 3, 5, 0, 0, 0, 0, 7, 0, 1, 0),
+              metrics={"success": ended(0, 0, 1, 1, 0, 0, 0, 0, 0, 0, 0, 0),
+                       "diverged": done * np.array([1, 0, 0], np.float32),
+                       "reward/reach": np.full((4, 3), 0.25, np.float32)})
+  log_q = np.linspace(-2, 0, 12, dtype=np.float32).reshape(4, 3)
+  m = jax.tree.map(float, _episode_metrics(traj, log_q, 0.1))
+  assert m["episodes"] == 4 and m["diverged"] == 1
+  assert m["return"] == pytest.approx((3 + 5 + 7 + 1) / 4)
+  assert m["success"] == pytest.approx(2 / 4)
+  assert m["reward"] == pytest.approx(5.5) and m["reward/reach"] == pytest.approx(0.25)
+  assert m["log_q"] == pytest.approx(-1.0) and m["bonus"] == pytest.approx(-0.1)
+  assert m["first_reward_t"] == 0  # the first row already pays env 1 and 2
+  none = _episode_metrics(dict(traj, done=np.zeros((4, 3), np.float32)), log_q, 0.1)
+  assert float(none["episodes"]) == 0 and float(none["return"]) == 0
 
 
 def test_config_rejects_impossible_settings():

@@ -7,9 +7,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from flax import struct
 
 import tasks
 from discosyn_jax import checkpoints, cli, loop, wrappers
+from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.train import Trainer
 from tests.toy_env import ReachAction
@@ -123,6 +125,38 @@ def test_non_finite_training_stops_and_keeps_the_last_good_checkpoint(tmp_path):
                log=lambda *_: None)
   assert int(loop.restore(good, run_dir / "final").step) == 2
   assert sorted(p.name for p in (run_dir / "checkpoints").iterdir()) == ["2"]
+
+
+@struct.dataclass
+class _Counter:  # a stand-in state: checkpoints store any pytree of arrays with a step
+  step: jax.Array
+  w: jax.Array
+
+
+def test_periodic_checkpoints_keep_the_newest_and_final_apart(tmp_path):
+  for step in range(1, 6):
+    checkpoints.save(tmp_path, _Counter(jnp.asarray(step), jnp.full(3, float(step))), keep=2)
+  assert sorted(p.name for p in (tmp_path / "checkpoints").iterdir()) == ["4", "5"]
+  checkpoints.save(tmp_path, _Counter(jnp.asarray(6), jnp.full(3, 6.0)), keep=2, final=True)
+  assert sorted(p.name for p in (tmp_path / "checkpoints").iterdir()) == ["4", "5"]
+  assert checkpoints.latest(tmp_path) == tmp_path / "final"
+  template = _Counter(jnp.asarray(0), jnp.zeros(3))
+  np.testing.assert_array_equal(checkpoints.restore(tmp_path / "checkpoints" / "4", template).w, 4.0)
+
+
+def test_force_replaces_the_run_and_only_it(tmp_path):
+  run_dir, beside = tmp_path / "run", tmp_path / "beside.txt"
+  beside.write_text("kept")
+  old, new = TrainConfig(**TINY, steps=4), TrainConfig(**TINY, steps=9)
+  loop.prepare_run_dir(run_dir, old, resume=False, force=False)
+  (run_dir / "metrics.jsonl").write_text("{}\n")
+  (run_dir / "checkpoints" / "2").mkdir(parents=True)
+  with pytest.raises(ValueError, match="already holds a run"):
+    loop.prepare_run_dir(run_dir, new, resume=False, force=False)
+  assert loop.prepare_run_dir(run_dir, new, resume=False, force=True) == new
+  assert [p.name for p in run_dir.iterdir()] == ["config.json"]
+  assert config_lib.load(run_dir / "config.json") == new
+  assert beside.read_text() == "kept"
 
 
 def _fails_with_one_line(argv, capsys, match):

@@ -47,3 +47,21 @@ class ReachAction(Env):
     metrics = {"success": (error < 0.01).astype(jnp.float32), "diverged": jnp.zeros(()),
                "reward/reach": reward}
     return state.replace(pipeline_state=key, obs=self._obs(sub), reward=reward, metrics=metrics)
+
+
+class StopOnSignal(ReachAction):
+  """ReachAction whose episode also terminates (the task's own end, not the time limit) at
+  a step whose action[0] exceeds 0.5, so envs of a batch end at different steps.
+  Observation[0] is the number of steps taken in the episode."""
+
+  def reset(self, rng):
+    state = super().reset(rng)
+    return state.replace(pipeline_state=(state.pipeline_state, jnp.zeros(())),
+                         obs=state.obs.at[0].set(0.0))
+
+  def step(self, state, action):
+    key, t = state.pipeline_state
+    state = super().step(state.replace(pipeline_state=key), action)
+    return state.replace(pipeline_state=(state.pipeline_state, t + 1),
+                         obs=state.obs.at[0].set(t + 1),
+                         done=(action[0] > 0.5).astype(jnp.float32))
