@@ -31,6 +31,9 @@ class TrainConfig:
   decoder_from: str = ""
   # False: a = the decoder's mean during training too (the sequential baselines' fixed spaces)
   decoder_noise: bool = True
+  # the decoder reads tanh(z): synergy activations bounded to [-1, 1], so that the heads
+  # cannot make up for any decoder by driving z far out (issue 13's hypothesis)
+  squash_z: bool = False
   # the extended reward, paper Eq. 2: alpha1 H(pi(z|s,n)) + alpha2 log q(z|a) + alpha3 H(p(a|z))
   alpha1: float = 1e-3
   alpha2: float = 1e-2

@@ -87,6 +87,7 @@ class DiscoSyn(nn.Module):
   decoder: str = "linear"
   decoder_bias: bool = True
   decoder_noise: bool = True
+  squash_z: bool = False
   policy_hidden: tuple[int, ...] = (128, 128)
   value_hidden: tuple[int, ...] = (128, 128)
   decoder_hidden: tuple[int, ...] = (128, 128)
@@ -125,7 +126,7 @@ class DiscoSyn(nn.Module):
     `decoder_noise` off)."""
     if self.decoder == "identity":
       return z, None
-    mean, log_std = self.synergy_decoder(z)
+    mean, log_std = self.synergy_decoder(jnp.tanh(z) if self.squash_z else z)
     return mean, log_std if self.decoder_noise else None
 
   def discriminate(self, a):
@@ -150,6 +151,7 @@ def build(config, obs_sizes: Sequence[int], action_size: int) -> DiscoSyn:
   return DiscoSyn(
       obs_sizes=tuple(int(s) for s in obs_sizes), n_synergies=b, action_size=action_size,
       decoder=config.decoder, decoder_bias=config.decoder_bias, decoder_noise=config.decoder_noise,
+      squash_z=config.squash_z,
       policy_hidden=tuple(config.policy_hidden), value_hidden=tuple(config.value_hidden),
       decoder_hidden=tuple(config.decoder_hidden),
       discriminator_hidden=tuple(config.discriminator_hidden),

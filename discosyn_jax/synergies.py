@@ -29,7 +29,8 @@ import optax
 
 from discosyn_jax import networks
 
-ARCHITECTURE = ("decoder", "n_synergies", "decoder_bias", "decoder_hidden")
+ARCHITECTURE = ("decoder", "n_synergies", "decoder_bias", "decoder_hidden", "squash_z")
+_DEFAULTS = {"squash_z": False}  # fields added since the first synergy files were written
 _RUN_DECODER = "params.params.synergy_decoder."
 
 
@@ -132,7 +133,7 @@ def decode(fields: dict[str, Any], params: dict, z: np.ndarray) -> np.ndarray:
   """The decoder's mean at z, for a decoder described by `fields` (ARCHITECTURE)."""
   from discosyn_jax.config import TrainConfig
 
-  config = TrainConfig(**{k: fields[k] for k in ARCHITECTURE})
+  config = TrainConfig(**{k: {**_DEFAULTS, **fields}[k] for k in ARCHITECTURE})
   action_size = int(np.shape(params["log_std"])[-1])
   model = networks.build(config, obs_sizes=(1,), action_size=action_size)
   return np.asarray(model.apply({"params": {"synergy_decoder": params}}, jnp.asarray(z),
@@ -152,6 +153,7 @@ def save(path: pathlib.Path, params: dict, fields: dict[str, Any], **meta) -> pa
   path.parent.mkdir(parents=True, exist_ok=True)
   flat = {".".join(str(getattr(k, "key", k)) for k in keys): np.asarray(leaf)
           for keys, leaf in jax.tree_util.tree_flatten_with_path(params)[0]}
+  fields = {**_DEFAULTS, **fields}
   info = {**{k: fields[k] for k in ARCHITECTURE}, **meta}
   fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz")
   with os.fdopen(fd, "wb") as f:
@@ -180,6 +182,7 @@ def read(path: str | pathlib.Path) -> tuple[dict[str, Any], dict]:
       raise ValueError(f"{path} is not a synergy file ({type(err).__name__}: {err})") from None
   else:
     raise ValueError(f"decoder source {path} does not exist")
+  meta = {**_DEFAULTS, **meta}
   meta["decoder_hidden"] = tuple(meta["decoder_hidden"])
   params: dict = {}
   for name, value in flat.items():
