@@ -1,29 +1,76 @@
 """Checkpoints of the whole TrainState (parameters, every optimiser state, normalisers, env
-states, rng, step) with orbax, which writes to a temporary folder and renames it when
-complete, so a crash never leaves a half-written checkpoint behind.
+states, rng, step) with orbax, each with a manifest that lets a reader trust it.
 
 A run directory holds:
   config.json           the TrainConfig
   checkpoints/<step>/   periodic checkpoints (the newest `keep_checkpoints` kept)
   final/                the state at the end of the run
-  metrics.jsonl, eval.jsonl
+  metrics.jsonl, eval.jsonl, tb/
+
+A checkpoint is an orbax checkpoint plus manifest.json: its step, and the size and SHA-256
+of every file in it. It is written whole as `NAME.new` beside the others and swapped in by
+renames (atomic.py), `final/` too, so a kill at any instant leaves every checkpoint that
+was complete before it. Readers verify the manifest: a damaged checkpoint is skipped with
+one line naming it, and the newest good one is used.
 """
 
 from __future__ import annotations
 
+import contextlib
+import errno
+import hashlib
+import json
+import logging
+import math
+import os
 import pathlib
+import re
+import shutil
+import sys
 
 import jax
 import orbax.checkpoint as ocp
 
+from discosyn_jax import atomic
+
 FINAL = "final"
-_ITEM = "default"  # CheckpointManager's folder for the one item of a step
+PERIODIC = "checkpoints"
+MANIFEST = "manifest.json"
+_ITEM = "default"  # the item folder of checkpoints written by orbax's CheckpointManager (older runs)
+_ORBAX_TMP = ".orbax-checkpoint-tmp"  # orbax's own folder while it writes
 
 
-def _manager(run_dir: pathlib.Path, keep: int) -> ocp.CheckpointManager:
-  options = ocp.CheckpointManagerOptions(max_to_keep=keep, create=True, cleanup_tmp_directories=True,
-                                         enable_async_checkpointing=False)
-  return ocp.CheckpointManager((run_dir / "checkpoints").resolve(), options=options)
+class Damaged(ValueError):
+  """A checkpoint that cannot be read or whose files differ from its manifest."""
+
+
+class SaveFailed(OSError):
+  """A checkpoint could not be written (e.g. a full disk); the ones before it are intact."""
+
+
+def warn(message: str) -> None:
+  print(f"discosyn: warning: {message}", file=sys.stderr)
+
+
+@contextlib.contextmanager
+def _quiet():
+  """Keep orbax's absl log lines (a metadata warning on every restore, tracebacks from its
+  writer threads on a full disk) off the terminal: what fails is reported here, in one line."""
+  logger = logging.getLogger("absl")
+  level = logger.level
+  logger.setLevel(logging.CRITICAL)
+  try:
+    yield
+  finally:
+    logger.setLevel(level)
+
+
+def _silence_abandoned_writes() -> None:
+  """After a failed save, orbax's writer threads go on failing in the background, and the
+  asyncio futures it abandons log their traceback whenever they are collected, up to the
+  process's exit: all of it is the one error SaveFailed reports."""
+  logging.getLogger("absl").setLevel(logging.CRITICAL)
+  logging.getLogger("asyncio").setLevel(logging.CRITICAL)
 
 
 def _named_leaves(tree) -> list[tuple[str, object]]:
@@ -45,37 +92,178 @@ def _arrays(tree) -> dict[str, jax.Array]:
           if isinstance(leaf, jax.Array) and leaf.size > 0}
 
 
+# -- writing -------------------------------------------------------------------
+
+def _digest(path: pathlib.Path, sync: bool = False) -> str:
+  sha = hashlib.sha256()
+  with open(path, "rb") as f:
+    for block in iter(lambda: f.read(1 << 20), b""):
+      sha.update(block)
+    if sync:  # the data reaches the disk before the rename that publishes it
+      os.fsync(f.fileno())
+  return sha.hexdigest()
+
+
+def _files(folder: pathlib.Path) -> list[pathlib.Path]:
+  return sorted(p for p in folder.rglob("*") if p.is_file() and p.name != MANIFEST)
+
+
+def _write(folder: pathlib.Path, arrays: dict, step: int) -> None:
+  with _quiet():
+    checkpointer = ocp.StandardCheckpointer()
+    checkpointer.save(folder.resolve(), arrays, custom_metadata={"step": step})
+    checkpointer.wait_until_finished()
+  files = {str(p.relative_to(folder)): {"bytes": p.stat().st_size, "sha256": _digest(p, sync=True)}
+           for p in _files(folder)}
+  atomic.write_text(folder / MANIFEST, json.dumps({"step": step, "files": files}, indent=1))
+
+
+def _check_room(folder: pathlib.Path, arrays: dict) -> None:
+  """Fail before orbax starts when the disk cannot hold the checkpoint (its arrays
+  uncompressed, and a MiB of metadata): orbax's writer threads, cut short by a full disk,
+  go on failing in the background and print tracebacks."""
+  needed = sum(a.nbytes for a in arrays.values()) + 2**20
+  free = shutil.disk_usage(folder).free
+  if free < needed:
+    raise OSError(errno.ENOSPC, f"{os.strerror(errno.ENOSPC)} ({free / 2**20:.1f} MiB free, "
+                                f"the checkpoint needs up to {needed / 2**20:.1f} MiB)")
+
+
+def _reason(err: BaseException) -> str:
+  """What went wrong, in a few words: tensorstore reports an OS error as text."""
+  if isinstance(err, OSError) and err.strerror:
+    return err.strerror
+  code = re.search(r"os_error_code='?(\d+)", str(err))
+  if code:
+    return os.strerror(int(code.group(1)))
+  return str(err).splitlines()[0][:200] if str(err) else type(err).__name__
+
+
+def _clear_leftovers(folder: pathlib.Path) -> None:
+  for pattern in (f"*{_ORBAX_TMP}*", f"*{atomic.TRASH}"):
+    for path in folder.glob(pattern):
+      shutil.rmtree(path, ignore_errors=True)
+
+
+def tidy(run_dir: pathlib.Path) -> None:
+  """Finish what a kill interrupted in a run's checkpoints (the writer's job, before it
+  reads or saves): unfinished writes go, an interrupted swap is completed or undone."""
+  run_dir = pathlib.Path(run_dir)
+  atomic.settle(run_dir / FINAL)
+  _clear_leftovers(run_dir)
+  periodic = run_dir / PERIODIC
+  if periodic.is_dir():
+    for name in {p.name.split(".")[0] for p in periodic.iterdir() if p.name.split(".")[0].isdigit()}:
+      atomic.settle(periodic / name)
+    _clear_leftovers(periodic)
+
+
 def save(run_dir: pathlib.Path, state, keep: int, final: bool = False) -> pathlib.Path:
-  """Write `state` as a periodic checkpoint (named by its step) or as `final`."""
+  """Write `state` as a periodic checkpoint (named by its step, the newest `keep` kept) or
+  as `final`; return its folder. Raises SaveFailed, leaving the older checkpoints intact."""
   run_dir = pathlib.Path(run_dir)
   step = int(state.step)
-  arrays = _arrays(state)
-  if final:
-    path = run_dir / FINAL
-    checkpointer = ocp.StandardCheckpointer()
-    # force: a resumed run replaces the final state of the run it continues
-    checkpointer.save(path.resolve(), arrays, force=True, custom_metadata={"step": step})
-    checkpointer.wait_until_finished()
-    return path
-  with _manager(run_dir, keep) as manager:
-    manager.save(step, args=ocp.args.StandardSave(arrays), force=True)
-    manager.wait_until_finished()
-  return run_dir / "checkpoints" / str(step)
+  target = run_dir / FINAL if final else run_dir / PERIODIC / str(step)
+  tidy(run_dir)
+  new = atomic.sibling(target, atomic.NEW)
+  arrays, failure = _arrays(state), None
+  try:
+    target.parent.mkdir(parents=True, exist_ok=True)
+    _check_room(target.parent, arrays)
+    _write(new, arrays, step)
+  except Exception as err:  # orbax reports a full disk as ValueError
+    failure = _reason(err)
+  if failure:
+    _silence_abandoned_writes()
+    shutil.rmtree(new, ignore_errors=True)
+    _clear_leftovers(target.parent)
+    raise SaveFailed(f"could not write checkpoint {target}: {failure}")
+  atomic.swap_in(new, target)
+  if not final:
+    for old in sorted(_periodic_steps(run_dir), reverse=True)[keep:]:
+      atomic.remove_dir(run_dir / PERIODIC / str(old))
+  return target
 
 
-def latest(run_dir: pathlib.Path) -> pathlib.Path | None:
-  """The checkpoint of a run that holds the most train steps (final or periodic)."""
-  run_dir = pathlib.Path(run_dir)
-  candidates = [(int(p.name), 0, p) for p in (run_dir / "checkpoints").glob("*") if p.name.isdigit()]
-  if (run_dir / FINAL).is_dir():
-    meta = ocp.StandardCheckpointer().metadata((run_dir / FINAL).resolve())
-    candidates.append((int(meta.custom_metadata["step"]), 1, run_dir / FINAL))
-  return max(candidates)[2] if candidates else None
+# -- reading -------------------------------------------------------------------
+
+def _periodic_steps(run_dir: pathlib.Path) -> list[int]:
+  periodic = run_dir / PERIODIC
+  if not periodic.is_dir():
+    return []
+  names = {p.name.removesuffix(atomic.OLD) for p in periodic.iterdir()}
+  return [int(n) for n in names if n.isdigit() and atomic.readable(periodic / n) is not None]
 
 
 def _item(path: pathlib.Path) -> pathlib.Path:
-  # a periodic checkpoint: CheckpointManager keeps its item in a subfolder
+  # a periodic checkpoint of an older run: CheckpointManager kept its item in a subfolder
   return path / _ITEM if (path / _ITEM).is_dir() else path
+
+
+def verify(path: pathlib.Path) -> int:
+  """The step of the checkpoint at `path` after checking every file against its manifest;
+  Damaged when one is missing or differs. A checkpoint of an older version has no manifest:
+  it is trusted as far as orbax can read its metadata."""
+  path = pathlib.Path(path)
+  if not path.is_dir():
+    raise Damaged(f"checkpoint {path} does not exist")
+  if not (path / MANIFEST).is_file():
+    try:
+      with _quiet():
+        meta = ocp.StandardCheckpointer().metadata(_item(path).resolve())
+      name = path.name.removesuffix(atomic.OLD)
+      return int(name) if name.isdigit() else int(meta.custom_metadata["step"])
+    except Exception as err:  # orbax raises what its reader met
+      raise Damaged(f"checkpoint {path} is damaged: unreadable ({_reason(err)})") from None
+  try:
+    manifest = json.loads((path / MANIFEST).read_text())
+    step, files = int(manifest["step"]), dict(manifest["files"])
+  except (ValueError, KeyError, TypeError, OSError):
+    raise Damaged(f"checkpoint {path} is damaged: its {MANIFEST} is unreadable") from None
+  for name, want in sorted(files.items()):
+    file = path / name
+    if not file.is_file():
+      raise Damaged(f"checkpoint {path} is damaged: {name} is missing")
+    if file.stat().st_size != want["bytes"] or _digest(file) != want["sha256"]:
+      raise Damaged(f"checkpoint {path} is damaged: {name} differs from its checksum")
+  return step
+
+
+def _step_of(path: pathlib.Path) -> float:
+  """The step a checkpoint claims (for ordering; verify() checks it); infinite when it
+  cannot be read, so that readers meet it first and name it."""
+  try:
+    return int(json.loads((path / MANIFEST).read_text())["step"])
+  except (ValueError, KeyError, TypeError, OSError):
+    try:
+      return verify(path)
+    except Damaged:
+      return math.inf
+
+
+def candidates(run_dir: pathlib.Path) -> list[pathlib.Path]:
+  """A run's checkpoints, newest first (final before a periodic one of the same step; one
+  whose step cannot be read first of all), unverified; the `.old` copy of one whose swap a
+  kill interrupted stands in for it."""
+  run_dir = pathlib.Path(run_dir)
+  found = [(step, 0, atomic.readable(run_dir / PERIODIC / str(step)))
+           for step in _periodic_steps(run_dir)]
+  final = atomic.readable(run_dir / FINAL)
+  if final is not None:
+    found.append((_step_of(final), 1, final))
+  return [path for _, _, path in sorted(found, key=lambda c: c[:2], reverse=True)]
+
+
+def latest(run_dir: pathlib.Path, warn=warn) -> pathlib.Path | None:
+  """The newest checkpoint of a run that passes verify(); `warn` gets one line for each
+  damaged one skipped."""
+  for path in candidates(run_dir):
+    try:
+      verify(path)
+      return path
+    except Damaged as err:
+      warn(f"{err}; skipping it")
+  return None
 
 
 def read_arrays(path: pathlib.Path, prefix: str) -> dict[str, "np.ndarray"]:
@@ -83,27 +271,32 @@ def read_arrays(path: pathlib.Path, prefix: str) -> dict[str, "np.ndarray"]:
   prefix removed), without building the state they belong to: e.g. a run's decoder."""
   import numpy as np
 
-  path = _item(pathlib.Path(path))
+  verify(path)
+  item = _item(pathlib.Path(path))
   try:
-    saved = ocp.StandardCheckpointer().restore(path.resolve())
-  except (FileNotFoundError, ValueError, KeyError) as err:
-    raise ValueError(f"no readable checkpoint at {path} ({type(err).__name__})") from None
+    with _quiet():
+      saved = ocp.StandardCheckpointer().restore(item.resolve())
+  except Exception as err:  # orbax raises what its reader met
+    raise Damaged(f"checkpoint {path} is damaged: unreadable ({_reason(err)})") from None
   return {k[len(prefix):]: np.asarray(v) for k, v in saved.items() if k.startswith(prefix)}
 
 
 def restore(path: pathlib.Path, target):
   """The state saved at `path`, in the structure of `target` (a state of the same config).
 
-  A checkpoint written for another config raises ValueError with one line saying so.
+  A damaged checkpoint raises Damaged; one written for another config raises ValueError
+  with one line saying so.
   """
-  path = _item(pathlib.Path(path))
+  verify(path)
+  item = _item(pathlib.Path(path))
   checkpointer = ocp.StandardCheckpointer()
   try:
-    saved = checkpointer.metadata(path.resolve()).item_metadata
-  except (FileNotFoundError, ValueError, KeyError, AttributeError) as err:
-    raise ValueError(f"no readable checkpoint at {path} ({type(err).__name__})") from None
+    with _quiet():
+      saved = checkpointer.metadata(item.resolve()).item_metadata
+  except Exception as err:  # orbax raises what its reader met
+    raise Damaged(f"checkpoint {path} is damaged: unreadable ({_reason(err)})") from None
   if saved is None:
-    raise ValueError(f"no readable checkpoint at {path}")
+    raise Damaged(f"checkpoint {path} is damaged: it holds no arrays")
   wanted = _arrays(target)
   for name in sorted(set(saved) | set(wanted)):
     have = (tuple(saved[name].shape), saved[name].dtype) if name in saved else "absent"
@@ -112,6 +305,15 @@ def restore(path: pathlib.Path, target):
       raise ValueError(f"checkpoint {path} does not match this config: {name} is {have} there, "
                        f"{want} here")
   abstract = {k: ocp.utils.to_shape_dtype_struct(v) for k, v in wanted.items()}
-  restored = checkpointer.restore(path.resolve(), abstract)
+  try:
+    with _quiet():
+      restored = checkpointer.restore(item.resolve(), abstract)
+  except Exception as err:  # orbax raises what its reader met
+    raise Damaged(f"checkpoint {path} is damaged: unreadable ({_reason(err)})") from None
   leaves = [restored.get(name, leaf) for name, leaf in _named_leaves(target)]
   return jax.tree_util.tree_unflatten(jax.tree_util.tree_structure(target), leaves)
+
+
+def remove(path: pathlib.Path) -> None:
+  """Delete a checkpoint (e.g. a damaged one a resumed run will write anew)."""
+  atomic.remove_dir(pathlib.Path(path))

@@ -326,9 +326,17 @@ def main(argv: list[str] | None = None) -> int:
   try:
     if getattr(args, "batch", 1) < 1:
       raise UsageError(f"--batch must be at least 1, not {args.batch}")
+    if getattr(args, "seed", None) is not None:
+      from discosyn_jax import checks
+
+      checks.seed(args.seed, "--seed")
     args.fn(args)
   except (UsageError, ValueError) as err:
     print(f"discosyn: error: {err}", file=sys.stderr)
+    return 2
+  except OSError as err:  # a file that cannot be read or written: a path, a full disk
+    print(f"discosyn: error: {err.filename + ': ' if err.filename else ''}"
+          f"{err.strerror or err}", file=sys.stderr)
     return 2
   except TrainingDiverged as err:  # the run stopped; its checkpoints are kept
     print(f"discosyn: {err}", file=sys.stderr)

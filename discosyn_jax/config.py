@@ -11,11 +11,14 @@ import dataclasses
 import json
 from typing import Any
 
+from discosyn_jax import atomic, checks
+
 DECODERS = ("linear", "mlp", "identity")
 
 # Fields that may differ between a run and its resumption: they change how long and how
 # often, never what the state holds.
 RESUMABLE = frozenset({"steps", "eval_every", "eval_envs", "checkpoint_every", "keep_checkpoints"})
+MAX_STEPS = 2**31 - 1  # the state counts train steps in an int32
 
 
 @dataclasses.dataclass(frozen=True)
@@ -74,6 +77,8 @@ class TrainConfig:
 
   def validate(self) -> "TrainConfig":
     """Raise ValueError naming the first impossible setting; return self."""
+    checks.fields(self)  # types first: a string or NaN fails here, not in the checks below
+    checks.seed(self.seed)
     if not self.tasks:
       raise ValueError("no tasks given")
     if len(set(self.tasks)) != len(self.tasks):
@@ -95,16 +100,22 @@ class TrainConfig:
     for name in positive:
       if getattr(self, name) < 1:
         raise ValueError(f"{name} must be at least 1, not {getattr(self, name)}")
-    for name in ("eval_every", "checkpoint_every", "alpha1", "alpha2", "alpha3"):
+    if self.steps > MAX_STEPS:
+      raise ValueError(f"steps must be at most {MAX_STEPS}, not {self.steps}")
+    for name in ("eval_every", "checkpoint_every", "alpha1", "alpha2", "alpha3", "value_coef"):
       if getattr(self, name) < 0:
         raise ValueError(f"{name} must not be negative, not {getattr(self, name)}")
+    for name in ("policy_hidden", "value_hidden", "decoder_hidden", "discriminator_hidden"):
+      if any(width < 1 for width in getattr(self, name)):
+        raise ValueError(f"the layer widths of {name} must be at least 1, not {getattr(self, name)}")
     samples = self.num_envs * self.unroll_length
     if samples % self.num_minibatches:
       raise ValueError(f"num_envs x unroll_length = {samples} does not split into "
                        f"{self.num_minibatches} minibatches")
     if not 0 < self.discount <= 1 or not 0 <= self.gae_lambda <= 1:
       raise ValueError("discount must be in (0, 1] and gae_lambda in [0, 1]")
-    for name in ("init_z_std", "init_action_std", "learning_rate", "discriminator_learning_rate"):
+    for name in ("init_z_std", "init_action_std", "learning_rate", "discriminator_learning_rate",
+                 "clip_epsilon", "max_grad_norm", "reward_scaling"):
       if getattr(self, name) <= 0:
         raise ValueError(f"{name} must be positive, not {getattr(self, name)}")
     return self
@@ -126,11 +137,11 @@ class TrainConfig:
 
 
 def save(config: TrainConfig, path) -> None:
-  with open(path, "w") as f:
-    json.dump(config.to_dict(), f, indent=1)
+  atomic.write_text(path, json.dumps(config.validate().to_dict(), indent=1))
 
 
 def load(path) -> TrainConfig:
+  """The checked config in the file at `path`; ValueError naming the file and the field."""
   try:
     with open(path) as f:
       values = json.load(f)
@@ -138,7 +149,10 @@ def load(path) -> TrainConfig:
     raise ValueError(f"malformed config file {path}: {err}") from None
   if not isinstance(values, dict):
     raise ValueError(f"malformed config file {path}: not a JSON object")
-  return TrainConfig.from_dict(values)
+  try:
+    return TrainConfig.from_dict(values).validate()
+  except (TypeError, ValueError) as err:
+    raise ValueError(f"config file {path}: {err}") from None
 
 
 def mismatches(saved: TrainConfig, requested: TrainConfig) -> list[str]:

@@ -53,6 +53,11 @@ class HandEnv(Env):
     return State(pstate, self.task.observation(view, info), zero, zero, metrics, info)
 
   def step(self, state: State, action: jax.Array) -> State:
+    # one env takes one action; a batch goes through jax.vmap (a wrong shape would
+    # otherwise surface as an XLA INTERNAL error inside the physics callback)
+    if jnp.shape(action) != (self.action_size,):
+      raise ValueError(f"an action of one env has shape ({self.action_size},), not "
+                       f"{jnp.shape(action)}; step a batch of envs with jax.vmap")
     info = state.info
     prev = self.physics.view(state.pipeline_state)
     pstate = self.physics.step(state.pipeline_state, self.action_to_ctrl(action))

@@ -8,6 +8,9 @@ from __future__ import annotations
 
 import json
 import pathlib
+import time
+
+from discosyn_jax import atomic
 
 METRICS_FILE = "metrics.jsonl"  # one row per train step
 EVAL_FILE = "eval.jsonl"  # one row per deterministic evaluation
@@ -48,24 +51,65 @@ def tag(name: str, kind: str) -> str:
   return name if "/" in name else f"train/{name}"
 
 
+def cut(path: pathlib.Path, step: int) -> list[dict]:
+  """Keep the rows of a JSON-lines log up to train step `step` (a resumed run's restored
+  step), and no line that is not a whole JSON object (a line a kill cut short); return the
+  rows kept. The file is replaced in one step, so a kill here loses nothing."""
+  path = pathlib.Path(path)
+  if not path.is_file():
+    return []
+  kept, rows = [], []
+  for line in path.read_text().splitlines():
+    try:
+      row = json.loads(line)
+    except json.JSONDecodeError:
+      continue
+    if isinstance(row, dict) and row.get("step", step + 1) <= step:
+      kept.append(line + "\n")
+      rows.append(row)
+  atomic.write_text(path, "".join(kept))
+  return rows
+
+
 class TensorBoard:
-  """Writes the rows of metrics.jsonl and eval.jsonl as scalars over env steps."""
+  """Writes the rows of metrics.jsonl and eval.jsonl as scalars over env steps.
 
-  def __init__(self, run_dir: pathlib.Path):
-    from tensorboardX import SummaryWriter
+  Events are written in the calling thread (tensorboardX's EventsWriter, not its
+  SummaryWriter's queue and thread), so a full disk raises here like any other write.
+  `history` (metrics rows, eval rows), for a resumed run, replaces the event files by those
+  rows: the logs then hold what an unbroken run's hold, nothing after the restored step.
+  """
 
-    self.writer = SummaryWriter(str(pathlib.Path(run_dir) / TENSORBOARD_DIR))
+  def __init__(self, run_dir: pathlib.Path, history: tuple[list[dict], list[dict]] | None = None):
+    from tensorboardX.event_file_writer import EventsWriter
+
+    folder = pathlib.Path(run_dir) / TENSORBOARD_DIR
+    if history is None:
+      folder.mkdir(exist_ok=True)
+      self.events = EventsWriter(str(folder / "events"))
+      return
+    atomic.settle(folder)
+    new = atomic.sibling(folder, atomic.NEW)
+    new.mkdir()
+    self.events = EventsWriter(str(new / "events"))
+    for rows, kind in zip(history, ("train", "eval")):
+      for row in rows:
+        self.write(row, kind)
+    atomic.swap_in(new, folder)  # the open event file moves with its folder
 
   def write(self, row: dict, kind: str) -> None:
     """`kind` is "train" (a metrics.jsonl row) or "eval" (an eval.jsonl row)."""
-    step = int(row["env_steps"])
-    for name, value in row.items():
-      if name not in _AXES:
-        self.writer.add_scalar(tag(name, kind), float(value), step)
-    self.writer.flush()
+    from tensorboardX.proto.event_pb2 import Event
+    from tensorboardX.proto.summary_pb2 import Summary
+
+    values = [Summary.Value(tag=tag(name, kind), simple_value=float(value))
+              for name, value in row.items() if name not in _AXES]
+    self.events.write_event(Event(wall_time=time.time(), step=int(row["env_steps"]),
+                                  summary=Summary(value=values)))
+    self.events.flush()
 
   def __enter__(self) -> "TensorBoard":
     return self
 
   def __exit__(self, *exc) -> None:
-    self.writer.close()
+    self.events.close()

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import pathlib
 import shutil
 import time
@@ -17,7 +18,7 @@ from typing import Any
 
 import jax
 
-from discosyn_jax import checkpoints, logs, plots
+from discosyn_jax import checkpoints, checks, logs, plots
 from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.train import Trainer, TrainState
@@ -29,18 +30,27 @@ class TrainingDiverged(RuntimeError):
   """A loss or a parameter became non-finite; the last good checkpoint is kept."""
 
 
-def prepare_run_dir(run_dir: pathlib.Path, config: TrainConfig, resume: bool, force: bool) -> TrainConfig:
-  """Check the run directory against what is asked, and return the config to run.
+class WriteFailed(ValueError):
+  """The run could not be written (a full disk, a folder made read-only); its last good
+  checkpoint is kept, and the message says where it is."""
+
+
+def run_config(run_dir: pathlib.Path, config: TrainConfig, resume: bool, force: bool) -> TrainConfig:
+  """Check the run directory against what is asked, writing nothing, and return the config
+  to run.
 
   A directory that holds a run is only continued (`resume`) or replaced (`force`), never
   silently overwritten; resuming keeps the run's config, except the fields that say how
   long and how often (config.RESUMABLE), which are taken from `config`.
   """
   run_dir = pathlib.Path(run_dir)
+  if run_dir.exists() and not run_dir.is_dir():
+    raise ValueError(f"{run_dir} is a file, not a run directory")
   holds_run = (run_dir / CONFIG_FILE).is_file()
   if resume:
     if not holds_run:
       raise ValueError(f"--resume: {run_dir} holds no run to continue")
+    _check_writable(run_dir)
     saved = config_lib.load(run_dir / CONFIG_FILE)
     differs = config_lib.mismatches(saved, config)
     if differs:
@@ -49,14 +59,53 @@ def prepare_run_dir(run_dir: pathlib.Path, config: TrainConfig, resume: bool, fo
   if holds_run and not force:
     raise ValueError(f"{run_dir} already holds a run; pass --resume to continue it or "
                      f"--force to replace it")
-  if run_dir.exists() and not holds_run and any(run_dir.iterdir()) and not force:
+  # --force replaces a run, never a folder of something else
+  if run_dir.exists() and not holds_run and any(run_dir.iterdir()):
     raise ValueError(f"{run_dir} is not empty and holds no run; choose another directory")
-  config.validate()
-  if force and run_dir.exists():
-    shutil.rmtree(run_dir)
-  run_dir.mkdir(parents=True, exist_ok=True)
-  config_lib.save(config, run_dir / CONFIG_FILE)
-  return config
+  _check_writable(run_dir.parent if force and run_dir.exists() else run_dir)
+  return config.validate()
+
+
+def _check_writable(path: pathlib.Path) -> None:
+  """Refuse a path that cannot be written (or created): a file in the way, a read-only
+  folder or file system."""
+  existing = next(p for p in (path, *path.parents) if p.exists() or p == p.parent)
+  if not existing.is_dir():
+    raise ValueError(f"cannot write {path}: {existing} is a file, not a folder")
+  if not os.access(existing, os.W_OK | os.X_OK):
+    raise ValueError(f"cannot write {path}: {existing} is not writable")
+
+
+def make_run_dir(run_dir: pathlib.Path, config: TrainConfig, force: bool) -> pathlib.Path | None:
+  """Create the run directory of a new run (replacing a run there with `force`) and write
+  its config; return the folder to remove if the run fails before its first step (the
+  topmost one created here), None when `run_dir` was there already."""
+  run_dir = pathlib.Path(run_dir)
+  created = None
+  for path in (run_dir, *run_dir.parents):
+    if path.exists():
+      break
+    created = path
+  try:
+    if force and run_dir.exists():
+      shutil.rmtree(run_dir)
+      created = run_dir
+    run_dir.mkdir(parents=True, exist_ok=True)
+    config_lib.save(config, run_dir / CONFIG_FILE)
+  except OSError as err:
+    _remove_new_run(run_dir, created)
+    raise ValueError(f"cannot write the run directory {run_dir}: {err.strerror or err}") from None
+  return created
+
+
+def _remove_new_run(run_dir: pathlib.Path, created: pathlib.Path | None) -> None:
+  """Leave no trace of a run that never made a step: the folders made for it, or what it
+  wrote into a folder that was there before."""
+  if created is not None:
+    shutil.rmtree(created, ignore_errors=True)
+  elif run_dir.is_dir():
+    for path in run_dir.iterdir():
+      shutil.rmtree(path, ignore_errors=True) if path.is_dir() else path.unlink(missing_ok=True)
 
 
 def find_run_dir(path: pathlib.Path) -> pathlib.Path:
@@ -69,13 +118,14 @@ def find_run_dir(path: pathlib.Path) -> pathlib.Path:
 
 
 def load_run(path: pathlib.Path) -> tuple[TrainConfig, pathlib.Path]:
-  """(config, checkpoint) of a run directory (its latest checkpoint) or a checkpoint folder."""
+  """(config, checkpoint) of a run directory (its newest good checkpoint) or a checkpoint
+  folder."""
   path = pathlib.Path(path)
   run_dir = find_run_dir(path)
   config = config_lib.load(run_dir / CONFIG_FILE)
   checkpoint = checkpoints.latest(run_dir) if path == run_dir else path
   if checkpoint is None:
-    raise ValueError(f"{run_dir} holds no checkpoint yet")
+    raise ValueError(f"{run_dir} holds no good checkpoint yet")
   return config, checkpoint
 
 
@@ -110,13 +160,36 @@ def restore(trainer: Trainer, checkpoint: pathlib.Path) -> TrainState:
   return checkpoints.restore(checkpoint, trainer.init())
 
 
+def restore_latest(trainer: Trainer, run_dir: pathlib.Path, remove_damaged: bool = False,
+                   warn=checkpoints.warn) -> tuple[pathlib.Path | None, TrainState | None]:
+  """(checkpoint, state) of the newest checkpoint of a run that restores, (None, None) when
+  none does. Each damaged one on the way is named in one line (and, for a run that goes
+  on from an older one, removed: it will be written anew)."""
+  for checkpoint in checkpoints.candidates(run_dir):
+    try:
+      return checkpoint, restore(trainer, checkpoint)
+    except checkpoints.Damaged as err:
+      if remove_damaged:
+        checkpoints.remove(checkpoint)
+      warn(f"{err}; {'removed' if remove_damaged else 'skipped'} it")
+  return None, None
+
+
 def load_trained(path: pathlib.Path, make_trainer=Trainer, **changes) -> tuple[Trainer, TrainState]:
-  """The trainer and the restored state of a run (its latest checkpoint) or of a checkpoint;
-  `changes` replace config fields that do not change the state's layout (backend, eval_envs);
-  `make_trainer(config)` builds the trainer (tests give tiny envs)."""
-  config, checkpoint = load_run(pathlib.Path(path))
+  """The trainer and the restored state of a run (its newest checkpoint that restores) or
+  of a checkpoint; `changes` replace config fields that do not change the state's layout
+  (backend, eval_envs); `make_trainer(config)` builds the trainer (tests give tiny envs)."""
+  path = pathlib.Path(path)
+  run_dir = find_run_dir(path)
+  config = config_lib.load(run_dir / CONFIG_FILE)
   trainer = make_trainer(config.replace(**changes).validate())
-  return trainer, restore(trainer, checkpoint)
+  checks.memory(trainer.config, trainer.envs)
+  if path != run_dir:
+    return trainer, restore(trainer, path)
+  checkpoint, state = restore_latest(trainer, run_dir)
+  if state is None:
+    raise ValueError(f"{run_dir} holds no good checkpoint yet")
+  return trainer, state
 
 
 def evaluate(trainer: Trainer, state: TrainState) -> dict[str, dict[str, float]]:
@@ -140,70 +213,118 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, f
           progress: bool = True, trainer: Trainer | None = None, log=print,
           devices=None) -> dict[str, Any]:
   """Run (or continue) a training run in `run_dir`; return the final evaluation.
-  `devices`: the count to split the env batch over (default: all; see devices.py)."""
-  run_dir = pathlib.Path(run_dir)
-  config = prepare_run_dir(run_dir, config, resume, force)
-  trainer = trainer or Trainer(config, devices=devices)
-  checkpoint = checkpoints.latest(run_dir) if resume else None
-  if checkpoint is not None:
-    state = restore(trainer, checkpoint)
-    log(f"resumed from {checkpoint} at step {int(state.step)}")
-  else:
-    state = trainer.init(decoder_params=initial_decoder(config))
-  start_step = int(state.step)
-  reference = decoder_reference(trainer, state, log)
+  `devices`: the count to split the env batch over (default: all; see devices.py).
 
-  start = time.perf_counter()
-  train_step = trainer.train_step.lower(state).compile()
-  compile_s = time.perf_counter() - start
+  Everything that can refuse the run (the config, the folder, the envs, the memory they
+  need) is checked before the run directory is made. Continuing a run restores its newest
+  good checkpoint and cuts its logs back to that step. A write that fails mid-run (a full
+  disk) stops it with WriteFailed, naming the last good checkpoint.
+  """
+  run_dir = pathlib.Path(run_dir)
+  config = run_config(run_dir, config, resume, force)
+  trainer = trainer or Trainer(config, devices=devices)
+  checks.memory(config, trainer.envs)
+  created = None if resume else make_run_dir(run_dir, config, force)
+  try:
+    last_good, state = _start(trainer, run_dir, resume, log)
+    start = time.perf_counter()
+    train_step = trainer.train_step.lower(state).compile()
+    compile_s = time.perf_counter() - start
+  except BaseException:  # nothing was learnt: a new run leaves no folder behind
+    if not resume:
+      _remove_new_run(run_dir, created)
+    raise
   log(f"train step compiled in {compile_s:.1f} s; {config.env_steps_per_train_step:,} env steps "
       f"per train step ({len(config.tasks)} tasks x {config.num_envs} envs x "
       f"{config.unroll_length} steps)")
 
+  start_step = int(state.step)
+  reference = decoder_reference(trainer, state, log)
   bar = _progress(progress, start_step, config.steps)
   shown = {}  # training success per task, as of the last rollout in which episodes ended
-  last_good = checkpoints.latest(run_dir)
-  with open(run_dir / logs.METRICS_FILE, "a") as metrics_file, \
-       open(run_dir / logs.EVAL_FILE, "a") as eval_file, logs.TensorBoard(run_dir) as board:
-    tick = time.perf_counter()
-    while int(state.step) < config.steps:
-      state, metrics = train_step(state)
-      if reference is not None:
-        metrics.update(trainer.decoder_drift(reference, state.params))
-      metrics = {k: float(v) for k, v in jax.device_get(metrics).items()}
-      for name in config.tasks:  # no episode ended in this rollout: no return or success to log
-        if metrics.get(f"{name}/episodes") == 0:
-          del metrics[f"{name}/return"], metrics[f"{name}/success"]
-      step = int(state.step)
-      now = time.perf_counter()
-      metrics.update(step=step, env_steps=step * config.env_steps_per_train_step,
-                     env_steps_per_s=config.env_steps_per_train_step / (now - tick),
-                     wall_s=now - start)
-      tick = now
-      metrics_file.write(json.dumps(metrics) + "\n")
-      metrics_file.flush()
-      board.write(metrics, "train")
-      if not metrics["finite"] or not math.isfinite(metrics["loss"]):
-        where = f"the last good checkpoint is {last_good}" if last_good else "no checkpoint was written"
-        raise TrainingDiverged(f"non-finite loss or parameters at step {step}; training stopped, "
-                               f"{where}")
+  step = start_step
+  try:
+    history = _cut_logs(run_dir, start_step) if resume else None
+    with open(run_dir / logs.METRICS_FILE, "a") as metrics_file, \
+         open(run_dir / logs.EVAL_FILE, "a") as eval_file, logs.TensorBoard(run_dir, history) as board:
+      if resume and _evaluates_at(config, step):  # the evaluation the cut removed, redone
+        _log_eval((eval_file, board), evaluate(trainer, state), step, config, 0.0)
+      tick = time.perf_counter()
+      while int(state.step) < config.steps:
+        state, metrics = train_step(state)
+        if reference is not None:
+          metrics.update(trainer.decoder_drift(reference, state.params))
+        metrics = {k: float(v) for k, v in jax.device_get(metrics).items()}
+        for name in config.tasks:  # no episode ended in this rollout: no return or success to log
+          if metrics.get(f"{name}/episodes") == 0:
+            del metrics[f"{name}/return"], metrics[f"{name}/success"]
+        step = int(state.step)
+        now = time.perf_counter()
+        metrics.update(step=step, env_steps=step * config.env_steps_per_train_step,
+                       env_steps_per_s=config.env_steps_per_train_step / (now - tick),
+                       wall_s=now - start)
+        tick = now
+        metrics_file.write(json.dumps(metrics) + "\n")
+        metrics_file.flush()
+        board.write(metrics, "train")
+        if not metrics["finite"] or not math.isfinite(metrics["loss"]):
+          raise TrainingDiverged(f"non-finite loss or parameters at step {step}; training stopped, "
+                                 f"{_where(last_good)}")
+        if bar is not None:
+          bar.update(1)
+          shown.update({n: metrics[f"{n}/success"] for n in config.tasks if f"{n}/success" in metrics})
+          bar.set_postfix_str(" ".join(f"{n}:{v:.0%}" for n, v in list(shown.items())[:6]))
+        if _evaluates_at(config, step):
+          _log_eval((eval_file, board), evaluate(trainer, state), step, config, now - start)
+        if config.checkpoint_every and step % config.checkpoint_every == 0:
+          last_good = checkpoints.save(run_dir, state, config.keep_checkpoints)
       if bar is not None:
-        bar.update(1)
-        shown.update({n: metrics[f"{n}/success"] for n in config.tasks if f"{n}/success" in metrics})
-        bar.set_postfix_str(" ".join(f"{n}:{v:.0%}" for n, v in list(shown.items())[:6]))
-      if config.eval_every and step % config.eval_every == 0 and step < config.steps:
-        _log_eval((eval_file, board), evaluate(trainer, state), step, config, now - start)
-      if config.checkpoint_every and step % config.checkpoint_every == 0:
-        last_good = checkpoints.save(run_dir, state, config.keep_checkpoints)
+        bar.close()
+        bar = None
+      results = evaluate(trainer, state)
+      _log_eval((eval_file, board), results, step, config, time.perf_counter() - start)
+    last_good = checkpoints.save(run_dir, state, config.keep_checkpoints, final=True)
+    curves = plots.run_curves(run_dir, run_dir / plots.PLOTS_DIR)
+  except OSError as err:  # a full disk, a folder made read-only, a checkpoint not written
+    what = str(err) if isinstance(err, checkpoints.SaveFailed) else \
+        f"could not write {err.filename or run_dir}: {err.strerror or err}"
+    raise WriteFailed(f"training stopped at step {step}: {what}; {_where(last_good)}") from None
+  finally:
     if bar is not None:
       bar.close()
-    results = evaluate(trainer, state)
-    _log_eval((eval_file, board), results, int(state.step), config, time.perf_counter() - start)
-  checkpoints.save(run_dir, state, config.keep_checkpoints, final=True)
-  curves = plots.run_curves(run_dir, run_dir / plots.PLOTS_DIR)
   log(f"training curves: {', '.join(str(p) for p in curves)}")
-  log(format_table(results, int(state.step), config))
+  log(format_table(results, step, config))
   return {"results": results, "state": state, "compile_s": compile_s}
+
+
+def _start(trainer: Trainer, run_dir: pathlib.Path, resume: bool, log):
+  """(checkpoint, state) to start from: the newest checkpoint that restores when
+  resuming (damaged ones on the way removed), else (None, a fresh state)."""
+  if resume:
+    checkpoints.tidy(run_dir)
+    checkpoint, state = restore_latest(trainer, run_dir, remove_damaged=True)
+    if state is not None:
+      log(f"resumed from {checkpoint} at step {int(state.step)}")
+      return checkpoint, state
+    log(f"{run_dir} holds no good checkpoint: starting from step 0")
+  return None, trainer.init(decoder_params=initial_decoder(trainer.config))
+
+
+def _evaluates_at(config: TrainConfig, step: int) -> bool:
+  """Whether the loop evaluates after train step `step` (the end of the run aside)."""
+  return bool(config.eval_every) and step % config.eval_every == 0 and 0 < step < config.steps
+
+
+def _cut_logs(run_dir: pathlib.Path, step: int) -> tuple[list[dict], list[dict]]:
+  """The logs of a resumed run cut back to its restored step: what an unbroken run held
+  then, but for the evaluation at that step, which may have been the end of a shorter run
+  (the loop redoes it where an unbroken run would have made it)."""
+  return (logs.cut(run_dir / logs.METRICS_FILE, step),
+          logs.cut(run_dir / logs.EVAL_FILE, step - 1))
+
+
+def _where(checkpoint: pathlib.Path | None) -> str:
+  return f"the last good checkpoint is {checkpoint}" if checkpoint else "no checkpoint was written"
 
 
 def _log_eval(outputs, results, step, config, wall_s):

@@ -33,6 +33,15 @@ def many_frames(model: mujoco.MjModel, datas: Iterable[mujoco.MjData], cameras=(
       yield np.concatenate(views, axis=1)
 
 
+def check_size(model: mujoco.MjModel, height: int, width: int) -> None:
+  """Refuse a picture size the model's offscreen buffer cannot hold (its <visual><global
+  offheight offwidth>), before anything is rolled out or drawn."""
+  for name, value, most in (("height", height, model.vis.global_.offheight),
+                            ("width", width, model.vis.global_.offwidth)):
+    if not 1 <= value <= most:
+      raise ValueError(f"--{name} must be between 1 and {most} pixels, not {value}")
+
+
 def check_new(paths, force: bool) -> None:
   """Refuse to overwrite pictures or videos already there, unless `force`."""
   if force:

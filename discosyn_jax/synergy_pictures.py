@@ -11,6 +11,7 @@
 
 from __future__ import annotations
 
+import math
 import pathlib
 
 import matplotlib
@@ -105,8 +106,8 @@ def write(trainer, params, out_dir: pathlib.Path, *, k: float = 1.0, force: bool
   if decoder == "identity":
     raise ValueError("this run's decoder is 'identity' (full-action PPO): it has no synergies "
                      "to picture")
-  if k <= 0:
-    raise ValueError(f"k must be positive, not {k}")
+  if not 0 < k < math.inf:  # NaN too
+    raise ValueError(f"--k must be a positive finite number, not {k}")
   out_dir = pathlib.Path(out_dir)
   paths = [out_dir / POSTURES_FILE] + ([out_dir / MATRIX_FILE] if decoder == "linear" else [])
   render.check_new(paths, force)

@@ -14,7 +14,7 @@ from typing import Any
 import jax
 import mujoco
 
-from discosyn_jax import scene
+from discosyn_jax import checks, scene
 from discosyn_jax.physics import PhysicsView
 
 Info = dict[str, Any]
@@ -27,6 +27,16 @@ class TaskConfig:
   episode_length: int = 100  # control steps of 0.04 s: 4 s
   n_substeps: int = 10  # physics steps of 0.004 s per control step
   hand_noise: float = 0.05  # rad, uniform noise on the initial hand joint angles
+
+  def __post_init__(self):
+    # every task's config (and every override of one): types, finite numbers, then ranges;
+    # the task classes check their own fields' ranges
+    checks.fields(self)
+    for name in ("episode_length", "n_substeps"):
+      if getattr(self, name) < 1:
+        raise ValueError(f"{name} must be at least 1, not {getattr(self, name)}")
+    if self.hand_noise < 0:
+      raise ValueError(f"hand_noise must not be negative, not {self.hand_noise}")
 
 
 class Task(abc.ABC):

@@ -18,7 +18,7 @@ import mujoco
 import numpy as np
 from PIL import Image
 
-from discosyn_jax import render
+from discosyn_jax import checks, render
 
 FORMATS = (".mp4", ".gif")
 
@@ -33,8 +33,6 @@ def episode_states(trainer, state, task: str, episodes: int, seed: int = 0
                    ) -> tuple[list[list[mujoco.MjData]], np.ndarray, np.ndarray]:
   """The MjData of every control step of `episodes` deterministic episodes of `task` (each up
   to its end, with the task's own values drawn in), their returns and successes."""
-  if episodes < 1:
-    raise ValueError(f"--episodes must be at least 1, not {episodes}")
   n = task_index(trainer.config, task)
   traj, ret, success = trainer.episodes(state.params, state.normalizers, jax.random.PRNGKey(seed),
                                         task=n, episodes=episodes, keep_states=True)
@@ -81,16 +79,23 @@ def render_policy(trainer, state, task: str, out: pathlib.Path, *, episodes: int
   wanted = (".png",) if frame is not None else FORMATS
   if out.suffix.lower() not in wanted:
     raise ValueError(f"{out}: the output must end in {' or '.join(wanted)}")
-  if height < 1 or width < 1:
-    raise ValueError(f"the picture size must be positive, not {height} x {width}")
   env = trainer.envs[task_index(trainer.config, task)]
+  model = env.mj_model
+  # every request checked before the rollout, which takes a while
+  render.check_size(model, height, width)
+  if frame is not None and not 0 <= frame < env.episode_length:
+    raise ValueError(f"--frame must be between 0 and {env.episode_length - 1} (the control steps "
+                     f"of an episode), not {frame}")
+  checks.seed(seed, "--seed")
+  if episodes < 1:
+    raise ValueError(f"--episodes must be at least 1, not {episodes}")
   render.check_new([out], force)
   datas, ret, success = episode_states(trainer, state, task, episodes, seed)
-  model = env.mj_model
   out.parent.mkdir(parents=True, exist_ok=True)
   if frame is not None:
-    if not 0 <= frame < len(datas[0]):
-      raise ValueError(f"--frame must be between 0 and {len(datas[0]) - 1} (the episode's steps)")
+    if frame >= len(datas[0]):
+      raise ValueError(f"--frame {frame} is past the end of the episode, which ended after "
+                       f"{len(datas[0])} steps")
     Image.fromarray(render.frames(model, datas[0][frame], cameras, height, width)).save(out)
     count = 1
   else:

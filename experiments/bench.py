@@ -35,12 +35,12 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from discosyn_jax import ppo
+from discosyn_jax import checks, ppo
 from discosyn_jax.train import Trainer
 
 
 def native_threads() -> int:
-  return int(os.environ.get("DISCOSYN_NATIVE_THREADS", os.cpu_count() or 1))
+  return checks.env_int("DISCOSYN_NATIVE_THREADS", os.cpu_count() or 1)
 
 
 class RawRollout:

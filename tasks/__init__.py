@@ -71,7 +71,10 @@ def make_config(name: str, **overrides) -> TaskConfig:
   if unknown:
     raise ValueError(f"task {name!r} has no setting {', '.join(unknown)}; "
                      f"its settings: {', '.join(sorted(fields))}")
-  return dataclasses.replace(defaults, **overrides)
+  try:
+    return dataclasses.replace(defaults, **overrides)
+  except ValueError as err:
+    raise ValueError(f"task {name!r}: {err}") from None
 
 
 def make(name: str, *, backend: str = "auto", **overrides) -> HandEnv:
@@ -79,7 +82,12 @@ def make(name: str, *, backend: str = "auto", **overrides) -> HandEnv:
 
   `overrides` replace fields of the task's default config (e.g. frictionloss=0.2).
   """
-  return HandEnv(entry(name).task(make_config(name, **overrides)), backend=backend)
+  config = make_config(name, **overrides)
+  try:
+    task = entry(name).task(config)
+  except ValueError as err:
+    raise ValueError(f"task {name!r}: {err}") from None
+  return HandEnv(task, backend=backend)
 
 
 def expand(names) -> list[str]:

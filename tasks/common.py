@@ -50,3 +50,12 @@ def require(condition: bool, message: str) -> None:
   """A bad config value: a ValueError that says which and why."""
   if not condition:
     raise ValueError(message)
+
+
+def require_hinge(config) -> None:
+  """The fields of a task that turns an object on a hinge (valves, screws): its physics
+  and the speed up to which turning is rewarded."""
+  for name in ("damping", "frictionloss"):
+    require(getattr(config, name) >= 0, f"{name} must not be negative, not {getattr(config, name)}")
+  require(config.max_rewarded_speed > 0,
+          f"max_rewarded_speed must be > 0 rad/s, not {config.max_rewarded_speed}")

@@ -51,6 +51,7 @@ class Screw(Task):
   def __init__(self, config: ScrewConfig):
     super().__init__(config)
     common.require(config.pitch > 0, f"pitch must be > 0 m/rad, not {config.pitch}")
+    common.require_hinge(config)
     common.require(0 < config.success_depth < 0.04,
                    f"success_depth must lie in (0, 0.04) m, the slide's travel, not {config.success_depth}")
     self.scene = "screw_topdown" if config.topdown else "screw"

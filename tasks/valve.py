@@ -55,6 +55,7 @@ class Valve(Task):
     common.require(config.shape in SHAPES, f"a valve's shape is one of {SHAPES}, not {config.shape!r}")
     common.require(config.arms in (0, 1, 2, 3), f"a valve has 0 to 3 arms, not {config.arms}")
     common.require(config.direction in (1.0, -1.0), f"direction is +1 or -1, not {config.direction}")
+    common.require_hinge(config)
     self.scene = "valve_cylinder" if config.shape == "wheel" else f"valve{config.arms}"
 
   def edit_spec(self, spec: mujoco.MjSpec) -> None:

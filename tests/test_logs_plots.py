@@ -1,16 +1,15 @@
 """A run's logs: JSONL read back, TensorBoard event files, training-curve PNGs."""
 
 import json
-import struct
 
 import numpy as np
 import pytest
 from PIL import Image
-from tensorboardX.proto import event_pb2
 
 from discosyn_jax import logs, loop, plots
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.train import Trainer
+from tests.helpers import tensorboard_scalars
 from tests.toy_env import ReachAction
 
 TOY = TrainConfig(tasks=("reach_a", "reach_b"), n_synergies=2, policy_hidden=(8,), value_hidden=(8,),
@@ -25,21 +24,6 @@ def toy_run(tmp_path_factory):
   trainer = Trainer(TOY, envs=[ReachAction(0.3, episode_length=5), ReachAction(-0.3, episode_length=5)])
   loop.train(TOY, run_dir, trainer=trainer, progress=False, log=lambda *_: None)
   return run_dir
-
-
-def tensorboard_scalars(folder) -> dict[str, list[tuple[int, float]]]:
-  """{tag: [(step, value)]} of the event files in `folder` (TFRecord: length, crc, data, crc)."""
-  out = {}
-  for path in sorted(folder.glob("events.out.tfevents.*")):
-    blob = path.read_bytes()
-    at = 0
-    while at < len(blob):
-      (length,) = struct.unpack("<Q", blob[at:at + 8])
-      event = event_pb2.Event.FromString(blob[at + 12:at + 12 + length])
-      at += 12 + length + 4
-      for value in event.summary.value:
-        out.setdefault(value.tag, []).append((event.step, value.simple_value))
-  return out
 
 
 def test_read_jsonl_keeps_rows_and_drops_only_a_cut_last_line(tmp_path):

@@ -19,7 +19,7 @@ TINY = TrainConfig(tasks=("valve1",), n_synergies=2, policy_hidden=(16,), value_
 def saved_run(run_dir, config, envs=None):
   """A run directory holding the initial state as its final checkpoint: the pictures and
   videos read a run the same way whether it trained for a minute or not at all."""
-  loop.prepare_run_dir(run_dir, config, resume=False, force=False)
+  loop.make_run_dir(run_dir, config, force=False)
   trainer = Trainer(config, envs)
   state = trainer.init()
   checkpoints.save(run_dir, state, config.keep_checkpoints, final=True)

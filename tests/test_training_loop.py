@@ -148,14 +148,19 @@ def test_force_replaces_the_run_and_only_it(tmp_path):
   run_dir, beside = tmp_path / "run", tmp_path / "beside.txt"
   beside.write_text("kept")
   old, new = TrainConfig(**TINY, steps=4), TrainConfig(**TINY, steps=9)
-  loop.prepare_run_dir(run_dir, old, resume=False, force=False)
+  loop.make_run_dir(run_dir, loop.run_config(run_dir, old, resume=False, force=False), force=False)
   (run_dir / "metrics.jsonl").write_text("{}\n")
   (run_dir / "checkpoints" / "2").mkdir(parents=True)
   with pytest.raises(ValueError, match="already holds a run"):
-    loop.prepare_run_dir(run_dir, new, resume=False, force=False)
-  assert loop.prepare_run_dir(run_dir, new, resume=False, force=True) == new
+    loop.run_config(run_dir, new, resume=False, force=False)
+  assert loop.run_config(run_dir, new, resume=False, force=True) == new
+  loop.make_run_dir(run_dir, new, force=True)
   assert [p.name for p in run_dir.iterdir()] == ["config.json"]
   assert config_lib.load(run_dir / "config.json") == new
+  assert beside.read_text() == "kept"
+  # a folder that holds something else than a run is never deleted, --force or not
+  with pytest.raises(ValueError, match="holds no run"):
+    loop.run_config(tmp_path, new, resume=False, force=True)
   assert beside.read_text() == "kept"
 
 

@@ -24,6 +24,7 @@ import mujoco.batch
 import numpy as np
 from flax import struct
 
+from discosyn_jax import checks
 from discosyn_jax.physics import PhysicsView
 
 _INTEGRATION = mujoco.mjtState.mjSTATE_INTEGRATION
@@ -45,8 +46,9 @@ class NativeBackend:
   def __init__(self, model: mujoco.MjModel, n_substeps: int, nthread: int | None = None):
     self.mj_model = model
     self.n_substeps = int(n_substeps)
-    env_threads = os.environ.get("DISCOSYN_NATIVE_THREADS")
-    self.nthread = int(nthread if nthread is not None else env_threads or (os.cpu_count() or 1))
+    if nthread is None:
+      nthread = checks.env_int("DISCOSYN_NATIVE_THREADS", os.cpu_count() or 1)
+    self.nthread = int(nthread)
     self.nstate = mujoco.mj_stateSize(model, _INTEGRATION)
     self._batches: dict[int, mujoco.batch.Batch] = {}
     self._lock = threading.Lock()  # a Batch must not serve two calls at once

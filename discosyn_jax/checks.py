@@ -1,0 +1,110 @@
+"""Checks of input that the configs, the CLI and the environment variables share: each
+raises ValueError with one line that names the setting, before anything is built or written.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import numbers
+import os
+import typing
+
+# jax.random.PRNGKey keeps 32 bits of a seed with x64 off (2**32 is seed 0 again), and the
+# evaluation draws with seed + 1
+MAX_SEED = 2**32 - 2
+_PLURALS = {str: "strings", int: "whole numbers", float: "finite numbers", bool: "true/false values"}
+
+
+def _kind_problem(kind, value) -> str | None:
+  """What `value` should be to have the type `kind`, or None when it has it."""
+  if kind is bool:
+    return None if isinstance(value, bool) else "true or false"
+  if kind is int:
+    ok = isinstance(value, numbers.Integral) and not isinstance(value, bool)
+    return None if ok else "a whole number"
+  if kind is float:
+    ok = (isinstance(value, numbers.Real) and not isinstance(value, bool)
+          and math.isfinite(value))
+    return None if ok else "a finite number"
+  if kind is str:
+    return None if isinstance(value, str) else "text"
+  if typing.get_origin(kind) is tuple:
+    args = typing.get_args(kind)
+    if len(args) == 2 and args[1] is Ellipsis:
+      wrong = not isinstance(value, tuple) or any(_kind_problem(args[0], v) for v in value)
+      return f"a list of {_PLURALS.get(args[0], 'values')}" if wrong else None
+  return None  # a type these checks do not know
+
+
+def fields(obj) -> None:
+  """Raise ValueError naming the first field of the dataclass `obj` whose value does not
+  have its declared type (numbers finite, whole numbers whole, flags true or false)."""
+  hints = typing.get_type_hints(type(obj))
+  for field in dataclasses.fields(obj):
+    value = getattr(obj, field.name)
+    problem = _kind_problem(hints.get(field.name), value)
+    if problem:
+      raise ValueError(f"{field.name} must be {problem}, not {value!r}")
+
+
+def seed(value: int, name: str = "seed") -> int:
+  if not isinstance(value, numbers.Integral) or not 0 <= value <= MAX_SEED:
+    raise ValueError(f"{name} must be a whole number between 0 and {MAX_SEED}, not {value!r}")
+  return int(value)
+
+
+def env_int(name: str, default: int, minimum: int = 1) -> int:
+  """The whole number in environment variable `name` (`default` when unset or empty)."""
+  text = os.environ.get(name, "").strip()
+  if not text:
+    return default
+  try:
+    value = int(text)
+  except ValueError:
+    value = None
+  if value is None or value < minimum:
+    raise ValueError(f"environment variable {name} must be a whole number of at least {minimum}, "
+                     f"not {text!r}")
+  return value
+
+
+def _state_bytes(env) -> int:
+  import jax
+
+  state = jax.eval_shape(env.reset, jax.random.PRNGKey(0))
+  return sum(leaf.size * leaf.dtype.itemsize for leaf in jax.tree.leaves(state))
+
+
+def memory_needed(config, envs) -> int:
+  """A lower bound of the bytes a training run holds at once: every env's state, the
+  rollout's per-step arrays (observation, z, action and a dozen scalars, float32) and the
+  evaluation's env states; on the native backend MuJoCo's own buffer for each simulation."""
+  total = 0
+  for env in envs:
+    per_env = _state_bytes(env)
+    if env.backend == "native":
+      per_env += env.mj_model.nbuffer
+    per_step = 4 * (env.observation_size + config.n_synergies + env.action_size + 12)
+    total += config.num_envs * (per_env + config.unroll_length * per_step)
+    total += config.eval_envs * per_env
+  return total
+
+
+def memory_available() -> int:
+  """Bytes of the accelerators' memory, or of the host's on a CPU."""
+  import jax
+
+  stats = jax.devices()[0].memory_stats() or {}
+  if "bytes_limit" in stats:
+    return stats["bytes_limit"] * jax.device_count()
+  return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+
+
+def memory(config, envs) -> None:
+  """Refuse a config whose envs cannot fit in memory, before it fails deep in an allocation."""
+  needed, have = memory_needed(config, envs), memory_available()
+  if needed > have:
+    raise ValueError(f"{len(envs)} task(s) x {config.num_envs} envs (and {config.eval_envs} "
+                     f"evaluation episodes) need at least {needed / 2**30:,.1f} GiB, more than the "
+                     f"{have / 2**30:,.1f} GiB here; lower num_envs or eval_envs")

@@ -1,0 +1,503 @@
+"""Fault injection: a kill at any instant (inside every save too), damaged and truncated
+checkpoints, a full disk, read-only folders, bad input of every kind. A run must come out
+of each recoverable, with the same logs as an unbroken run, and say what happened in one
+line; refused input leaves nothing behind.
+
+The runs are the toy task's (tests/fault_worker.py: TOY), a few seconds each; kills and full
+disks that need a process of their own run tests/fault_worker.py.
+"""
+
+import contextlib
+import itertools
+import json
+import math
+import os
+import pathlib
+import random
+import shutil
+import subprocess
+import sys
+import threading
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import tasks
+from discosyn_jax import atomic, checkpoints, cli, logs, loop, train, videos
+from discosyn_jax.train import Trainer
+from tests.fault_worker import TOY, small_state, toy_envs
+from tests.helpers import tensorboard_scalars
+
+REPO = pathlib.Path(__file__).resolve().parents[1]
+TIMING = {"wall_s", "env_steps_per_s"}  # the only columns in which two runs may differ
+
+
+def toy_trainer(config=TOY) -> Trainer:
+  return Trainer(config, envs=toy_envs(config))
+
+
+def quiet(*_):
+  pass
+
+
+def worker(*args, env=None, **popen):
+  return subprocess.Popen([sys.executable, "-u", "-m", "tests.fault_worker", *map(str, args)],
+                          cwd=REPO, env={**os.environ, **(env or {})}, text=True,
+                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, **popen)
+
+
+def good(run_dir) -> list[int]:
+  """Steps of the checkpoints a reader of `run_dir` sees, newest first. Each must pass its
+  manifest and hold its own step's values: a kill may hide a checkpoint, never damage one."""
+  steps = []
+  for path in checkpoints.candidates(run_dir):
+    step = checkpoints.verify(path)
+    restored = jax.device_get(checkpoints.restore(path, small_state(0)))
+    jax.tree.map(np.testing.assert_array_equal, restored, jax.device_get(small_state(step)))
+    steps.append(step)
+  return steps
+
+
+def leftovers(run_dir) -> list[str]:
+  return sorted(p.name for p in pathlib.Path(run_dir).rglob("*")
+                if p.name.endswith((".new", ".old", ".trash")) or ".orbax-checkpoint-tmp" in p.name)
+
+
+def one_error_line(capsys_or_text, *fragments) -> str:
+  err = capsys_or_text if isinstance(capsys_or_text, str) else capsys_or_text.readouterr().err
+  lines = err.strip().splitlines()
+  assert len(lines) == 1 and lines[0].startswith("discosyn: error:"), err
+  for fragment in fragments:
+    assert fragment in lines[0], (fragment, lines[0])
+  return lines[0]
+
+
+# -- kills -------------------------------------------------------------------
+
+class Killed(BaseException):
+  """A SIGKILL at that instant: the saver stops where it is (no `except Exception` of the
+  code under test catches a BaseException, so nothing tidies up)."""
+
+
+@contextlib.contextmanager
+def killed_at(instant: int):
+  """Raise Killed at the `instant`-th rename, replace or removal of an existing folder in
+  the main thread: the instants between which a save changes what is on disk (orbax's
+  writer threads are left to the real kills below)."""
+  seen = itertools.count(1)
+
+  def wrap(fn):
+    def call(path, *args, **kwargs):
+      if (threading.current_thread() is threading.main_thread() and os.path.exists(path)
+          and next(seen) == instant):
+        raise Killed
+      return fn(path, *args, **kwargs)
+    return call
+
+  with pytest.MonkeyPatch.context() as patch:
+    for module, name in ((os, "rename"), (os, "replace"), (shutil, "rmtree")):
+      patch.setattr(module, name, wrap(getattr(module, name)))
+    yield
+
+
+@pytest.fixture(scope="module")
+def saved_run(tmp_path_factory):
+  """Periodic checkpoints at steps 1 and 2 (two kept) and final/ at step 2."""
+  run_dir = tmp_path_factory.mktemp("saved") / "run"
+  for step in (1, 2):
+    checkpoints.save(run_dir, small_state(step), keep=2)
+  checkpoints.save(run_dir, small_state(2), keep=2, final=True)
+  return run_dir
+
+
+def test_a_kill_at_any_instant_of_a_save_leaves_every_good_checkpoint(saved_run, tmp_path):
+  swaps_cut = 0  # kills between the renames that swap final/: only final.old held it then
+  for instant in itertools.count(1):
+    run_dir = tmp_path / str(instant)
+    shutil.copytree(saved_run, run_dir)
+    try:
+      with killed_at(instant):  # a periodic save that prunes step 1, then final/ replaced
+        checkpoints.save(run_dir, small_state(3), keep=2)
+        checkpoints.save(run_dir, small_state(3), keep=2, final=True)
+      finished = True
+    except Killed:
+      finished = False
+    seen = good(run_dir)
+    assert len(seen) >= 3 and seen[0] >= 2, (instant, seen)  # before the saves: 1, 2, final 2
+    swaps_cut += not (run_dir / "final").exists()
+    checkpoints.tidy(run_dir)  # what the next writer does first: the readers' view stays
+    assert good_checkpoints_of(run_dir) == seen and leftovers(run_dir) == [], instant
+    if finished:
+      assert seen == [3, 3, 2]  # final 3, periodic 3 and 2
+      break
+  assert instant > 5 and swaps_cut == 1
+
+
+def test_kills_at_random_instants_never_cost_a_good_checkpoint(tmp_path):
+  """Real SIGKILLs, wherever they land: in orbax's writer threads, between renames, in a
+  prune. Each worker continues from the newest good checkpoint the last one left."""
+  run_dir = tmp_path / "run"
+  seed = random.randrange(2**32)
+  rng = random.Random(seed)
+  saved, count = 0, 0
+  for _ in range(3):
+    proc = worker("saves", run_dir)
+    assert proc.stdout.readline().strip() == "ready", proc.stderr.read()
+    saved = max(saved, int(proc.stdout.readline()))  # the first save, then at random
+    time.sleep(rng.uniform(0.0, 1.0))
+    proc.kill()
+    out, err = proc.communicate()
+    saved = max([saved, *map(int, out.split())])
+    seen = good(run_dir)
+    assert seen and seen[0] >= saved, (seed, saved, seen, err)
+    assert len(seen) >= count, (seed, seen)  # never fewer good checkpoints than before
+    count = len(seen)
+  assert saved >= 3, seed
+
+
+# -- damage --------------------------------------------------------------------
+
+def _largest_file(folder: pathlib.Path) -> pathlib.Path:
+  files = [p for p in folder.rglob("*") if p.is_file() and p.name != checkpoints.MANIFEST]
+  return max(files, key=lambda p: p.stat().st_size)
+
+
+def _damage(folder: pathlib.Path, how: str) -> str:
+  """Damage a checkpoint as a bad disk or a killed copy would; return the file it names."""
+  if how == "manifest":
+    (folder / checkpoints.MANIFEST).write_text('{"step": 2, "files": {"_MET')
+    return checkpoints.MANIFEST
+  data = _largest_file(folder)
+  if how == "garbage":  # same size, different bytes: only a checksum sees it
+    blob = bytearray(data.read_bytes())
+    blob[len(blob) // 2: len(blob) // 2 + 8] = b"garbage!"
+    data.write_bytes(bytes(blob))
+  elif how == "truncated":
+    data.write_bytes(data.read_bytes()[: data.stat().st_size // 2])
+  else:
+    data.unlink()
+  return str(data.relative_to(folder))
+
+
+@pytest.mark.parametrize("how", ["garbage", "truncated", "missing", "manifest"])
+def test_a_damaged_checkpoint_is_named_once_and_the_previous_good_one_used(saved_run, tmp_path,
+                                                                           capsys, how):
+  run_dir = tmp_path / "run"
+  shutil.copytree(saved_run, run_dir)
+  name = _damage(run_dir / "final", how)
+  with pytest.raises(checkpoints.Damaged, match=f"checkpoint {run_dir / 'final'} is damaged: .*"):
+    checkpoints.verify(run_dir / "final")
+  capsys.readouterr()
+  assert checkpoints.latest(run_dir) == run_dir / "checkpoints" / "2"
+  (line,) = capsys.readouterr().err.splitlines()
+  assert line.startswith(f"discosyn: warning: checkpoint {run_dir / 'final'} is damaged")
+  assert name in line and line.endswith("skipping it")
+  # two damaged: the oldest good one
+  _damage(run_dir / "checkpoints" / "2", how)
+  assert checkpoints.latest(run_dir, warn=quiet) == run_dir / "checkpoints" / "1"
+  _damage(run_dir / "checkpoints" / "1", how)
+  assert checkpoints.latest(run_dir, warn=quiet) is None
+
+
+# -- runs: kills, damage and full disks in the middle of training ------------------
+
+def run_logs(run_dir: pathlib.Path) -> dict:
+  """What a run logged, but for timings: JSONL rows and TensorBoard scalars."""
+  strip = lambda rows: [{k: v for k, v in r.items() if k not in TIMING} for r in rows]
+  return {"metrics": strip(logs.read_jsonl(run_dir / logs.METRICS_FILE)),
+          "eval": strip(logs.read_jsonl(run_dir / logs.EVAL_FILE)),
+          "tb": {tag: values for tag, values in tensorboard_scalars(run_dir / logs.TENSORBOARD_DIR).items()
+                 if tag.split("/")[-1] not in TIMING}}
+
+
+@pytest.fixture(scope="module")
+def unbroken(tmp_path_factory):
+  run_dir = tmp_path_factory.mktemp("runs") / "unbroken"
+  result = loop.train(TOY, run_dir, trainer=toy_trainer(), progress=False, log=quiet)
+  return run_dir, result
+
+
+@pytest.fixture
+def toy_tasks(monkeypatch):
+  """The CLI's runs on the toy task, as tests/fault_worker.py runs them."""
+  from experiments import presets
+
+  monkeypatch.setattr(train, "make_envs", toy_envs)
+  monkeypatch.setattr(presets, "preset", lambda name: TOY)
+
+
+def test_a_run_killed_inside_a_save_and_mid_line_resumes_to_the_unbroken_runs_logs(
+    unbroken, tmp_path, capfd):
+  straight_dir, straight = unbroken
+  run_dir = tmp_path / "run"
+  swap_in = atomic.swap_in
+
+  def killed_before_swapping_in_checkpoint_4(new, target):
+    if target.name == "4":
+      raise Killed
+    swap_in(new, target)
+
+  with pytest.MonkeyPatch.context() as patch:
+    patch.setattr(atomic, "swap_in", killed_before_swapping_in_checkpoint_4)
+    with pytest.raises(Killed):
+      loop.train(TOY, run_dir, trainer=toy_trainer(), progress=False, log=quiet)
+  with open(run_dir / logs.METRICS_FILE, "a") as f:  # and a line the kill cut short
+    f.write('{"step": 5, "loss": 0.2')
+  assert json.loads((run_dir / logs.EVAL_FILE).read_text().splitlines()[-1])["step"] == 4
+  resumed = loop.train(TOY, run_dir, resume=True, trainer=toy_trainer(), progress=False,
+                       log=print)
+  out, err = capfd.readouterr()
+  assert f"resumed from {run_dir / 'checkpoints' / '2'} at step 2" in out
+  assert "absl" not in err and "NaN" not in err and "Traceback" not in err, err
+  assert run_logs(run_dir) == run_logs(straight_dir)
+  jax.tree.map(np.testing.assert_array_equal, jax.device_get(straight["state"]),
+               jax.device_get(resumed["state"]))
+  assert sorted(p.name for p in (run_dir / "checkpoints").iterdir()) == ["4", "6"]
+
+
+def test_a_run_killed_at_a_random_instant_resumes_to_the_unbroken_runs_logs(unbroken, tmp_path):
+  straight_dir, _ = unbroken
+  run_dir = tmp_path / "run"
+  seed = random.randrange(2**32)
+  proc = worker("train", "--out", run_dir, "--no-progress")
+  for line in proc.stdout:  # the kill lands after compiling: while training, saving, logging
+    if line.startswith("train step compiled"):
+      break
+  else:
+    pytest.fail(proc.stderr.read())
+  time.sleep(random.Random(seed).uniform(0.0, 2.0))
+  proc.kill()
+  proc.communicate()
+  loop.train(TOY, run_dir, resume=True, trainer=toy_trainer(), progress=False, log=quiet)
+  assert run_logs(run_dir) == run_logs(straight_dir), seed
+
+
+def test_a_damaged_checkpoint_is_removed_on_resume_and_eval_falls_back(unbroken, tmp_path,
+                                                                       toy_tasks, capsys):
+  straight_dir, straight = unbroken
+  run_dir = tmp_path / "run"
+  shutil.copytree(straight_dir, run_dir)
+  _damage(run_dir / "final", "garbage")
+  assert cli.main(["eval", str(run_dir)]) == 0  # from checkpoints/6: the same state
+  out, err = capsys.readouterr()
+  (warning,) = err.splitlines()
+  assert str(run_dir / "final") in warning and warning.endswith("skipped it")
+  r = straight["results"]["valve1"]
+  assert [l.split() for l in out.splitlines() if l.startswith("valve1 ")] == [
+      ["valve1", f"{r['success']:.1%}", f"{r['return']:.2f}"]]
+  _damage(run_dir / "checkpoints" / "6", "truncated")
+  assert cli.main(["train", "--out", str(run_dir), "--resume", "--no-progress"]) == 0
+  out, err = capsys.readouterr()
+  assert len(err.splitlines()) == 2 and all(l.endswith("removed it") for l in err.splitlines())
+  assert f"resumed from {run_dir / 'checkpoints' / '4'} at step 4" in out
+  assert good_checkpoints_of(run_dir) == [6, 6, 4] and run_logs(run_dir) == run_logs(straight_dir)
+
+
+def good_checkpoints_of(run_dir) -> list[int]:
+  return [checkpoints.verify(p) for p in checkpoints.candidates(run_dir)]
+
+
+@pytest.fixture(scope="module")
+def small_disk():
+  """Whether this machine lets an unprivileged process mount a tmpfs of its own (where it
+  does not, a full disk is one that reports no free space)."""
+  try:
+    ok = subprocess.run(["unshare", "-r", "-m", "sh", "-c", "mount -t tmpfs none /mnt"],
+                        capture_output=True).returncode == 0
+  except FileNotFoundError:
+    ok = False
+  return ok
+
+
+def _run_on_small_disk(small_disk, tmp_path, args, starve_after: int):
+  """Run the worker with its run folder RUN on a disk that fills after `starve_after`
+  checkpoints; return (exit status, stderr, a copy of RUN as the worker left it)."""
+  copy = tmp_path / "run"
+  env = {"FAULT_STARVE_AFTER": str(starve_after)}
+  command = [sys.executable, "-u", "-m", "tests.fault_worker", *args]
+  if small_disk:
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    env["FAULT_FILL"] = str(disk)
+    script = ('mount -t tmpfs -o size=4m none "$DISK" && "$@"; status=$?; rm -f "$DISK/ballast"; '
+              'cp -a "$DISK/run" "$COPY"; exit $status')
+    command = ["unshare", "-r", "-m", "sh", "-c", script, "sh",
+               *[str(a).replace("RUN", str(disk / "run")) for a in command]]
+    env.update(DISK=str(disk), COPY=str(copy))
+  else:
+    command = [str(a).replace("RUN", str(copy)) for a in command]
+  proc = subprocess.run(command, cwd=REPO, env={**os.environ, **env}, capture_output=True, text=True)
+  return proc.returncode, proc.stderr, copy
+
+
+def test_a_full_disk_fails_a_save_in_one_line_and_keeps_the_checkpoints_before(small_disk, tmp_path):
+  status, err, run_dir = _run_on_small_disk(small_disk, tmp_path, ["saves", "RUN"], starve_after=4)
+  # saves: 1, 2, final 2, 3; the disk full, the save of 4 fails
+  assert status == 2 and len(err.strip().splitlines()) == 1, err
+  assert "could not write checkpoint" in err and str(pathlib.Path("checkpoints") / "4") in err
+  assert "No space left on device" in err
+  assert good_checkpoints_of(run_dir) == [3, 2, 2] and leftovers(run_dir) == []
+
+
+def test_a_full_disk_mid_run_stops_it_in_one_line_naming_the_last_good_checkpoint(small_disk, tmp_path):
+  status, err, run_dir = _run_on_small_disk(
+      small_disk, tmp_path, ["train", "--out", "RUN", "--no-progress"], starve_after=1)
+  line = one_error_line(err, "training stopped at step ", ": could not write",
+                        "the last good checkpoint is ")
+  assert line.endswith(str(pathlib.Path("run", "checkpoints", "2")))
+  assert "No space left on device" in line
+  assert status == 2 and good_checkpoints_of(run_dir) == [2]
+
+
+# -- read-only folders ---------------------------------------------------------------
+
+@pytest.fixture
+def read_only(tmp_path):
+  if os.geteuid() == 0:
+    pytest.skip("root writes into read-only folders")
+  folders = []
+
+  def make(path):
+    for p in (path, *[q for q in path.rglob("*") if q.is_dir()]):
+      p.chmod(0o555)
+      folders.append(p)
+    return path
+
+  yield make
+  for p in folders:
+    p.chmod(0o755)
+
+
+def test_a_read_only_run_is_evaluated_but_not_resumed(unbroken, tmp_path, read_only, toy_tasks,
+                                                      capsys):
+  run_dir = tmp_path / "run"
+  shutil.copytree(unbroken[0], run_dir)
+  read_only(run_dir)
+  before = sorted(p.name for p in run_dir.rglob("*"))
+  assert cli.main(["eval", str(run_dir)]) == 0
+  capsys.readouterr()
+  assert cli.main(["train", "--out", str(run_dir), "--resume", "--steps", "8"]) == 2
+  one_error_line(capsys, f"cannot write {run_dir}", "not writable")
+  assert cli.main(["train", "--out", str(run_dir / "new")]) == 2
+  one_error_line(capsys, "not writable")
+  assert sorted(p.name for p in run_dir.rglob("*")) == before
+
+
+# -- bad input -------------------------------------------------------------------------
+
+@pytest.mark.parametrize("flags, fragment", [
+    (["--alpha2", "nan"], "alpha2 must be a finite number, not nan"),
+    (["--alpha2", "inf"], "alpha2 must be a finite number, not inf"),
+    (["--lr", "nan"], "learning_rate must be a finite number"),
+    (["--lr", "-0.1"], "learning_rate must be positive"),
+    (["--seed", str(2**64)], "seed must be a whole number between 0 and"),
+    (["--seed", "-1"], "seed must be a whole number between 0 and"),
+    (["--steps", str(2**40)], "steps must be at most"),
+    (["--eval-every", "-2"], "eval_every must not be negative"),
+])
+def test_bad_hyper_parameters_are_refused_before_the_run_folder(tmp_path, capsys, toy_tasks, flags,
+                                                                fragment):
+  assert cli.main(["train", "--out", str(tmp_path / "run"), *flags]) == 2
+  one_error_line(capsys, fragment)
+  assert list(tmp_path.iterdir()) == []
+
+
+def test_more_envs_than_memory_holds_are_refused_before_the_run_folder(tmp_path, capsys):
+  out = tmp_path / "deep" / "run"
+  argv = ["train", "--tasks", "valve1", "--backend", "native", "--num-envs", "10000000",
+          "--out", str(out)]
+  assert cli.main(argv) == 2
+  one_error_line(capsys, "10000000 envs", "GiB", "lower num_envs")
+  assert list(tmp_path.iterdir()) == []
+
+
+def test_a_bad_environment_variable_is_named(tmp_path, capsys, monkeypatch):
+  monkeypatch.setenv("DISCOSYN_NATIVE_THREADS", "abc")
+  assert cli.main(["train", "--tasks", "valve1", "--backend", "native", "--out",
+                   str(tmp_path / "run")]) == 2
+  one_error_line(capsys, "DISCOSYN_NATIVE_THREADS", "'abc'")
+  assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("field, value, fragment", [
+    ("alpha2", math.nan, "alpha2 must be a finite number, not nan"),
+    ("num_envs", "64", "num_envs must be a whole number, not '64'"),
+    ("num_envs", 6.5, "num_envs must be a whole number"),
+    ("tasks", "valve1", "tasks must be a list of strings"),
+    ("normalize_observations", 1, "normalize_observations must be true or false"),
+    ("policy_hidden", [8, "x"], "policy_hidden must be a list of whole numbers"),
+])
+def test_a_bad_config_file_is_named_with_its_field(unbroken, tmp_path, capsys, toy_tasks, field,
+                                                   value, fragment):
+  run_dir = tmp_path / "run"
+  shutil.copytree(unbroken[0], run_dir)
+  config = json.loads((run_dir / "config.json").read_text())
+  (run_dir / "config.json").write_text(json.dumps({**config, field: value}))
+  before = sorted(p.name for p in run_dir.rglob("*"))
+  for argv in (["eval", str(run_dir)], ["train", "--out", str(run_dir), "--resume"]):
+    assert cli.main(argv) == 2
+    one_error_line(capsys, f"config file {run_dir / 'config.json'}", fragment)
+  assert sorted(p.name for p in run_dir.rglob("*")) == before
+
+
+def test_the_output_folder_must_be_a_folder(tmp_path, capsys, toy_tasks):
+  blocker = tmp_path / "file"
+  blocker.write_text("not a folder")
+  assert cli.main(["train", "--out", str(blocker)]) == 2
+  one_error_line(capsys, f"{blocker} is a file")
+  assert cli.main(["train", "--out", str(blocker / "run")]) == 2
+  one_error_line(capsys, f"{blocker} is a file")
+  assert blocker.read_text() == "not a folder" and sorted(tmp_path.iterdir()) == [blocker]
+
+
+def test_task_overrides_are_checked():
+  for overrides, fragment in (({"frictionloss": -1.0}, "frictionloss must not be negative"),
+                              ({"damping": math.nan}, "damping must be a finite number"),
+                              ({"max_rewarded_speed": 0.0}, "max_rewarded_speed must be > 0"),
+                              ({"episode_length": 0}, "episode_length must be at least 1"),
+                              ({"arms": "3"}, "arms must be a whole number")):
+    with pytest.raises(ValueError, match=f"task 'valve1': {fragment}"):
+      tasks.make("valve1", backend="native", **overrides)
+  with pytest.raises(ValueError, match="task 'screw': frictionloss must not be negative"):
+    tasks.make("screw", backend="native", frictionloss=-0.1)
+
+
+def test_a_batch_of_actions_to_one_env_is_a_clear_error():
+  env = tasks.make("valve1", backend="native")
+  state = env.reset(jax.random.PRNGKey(0))
+  for step in (env.step, jax.jit(env.step)):
+    with pytest.raises(ValueError, match=r"shape \(20,\), not \(2, 20\).*jax.vmap"):
+      step(state, jnp.zeros((2, 20)))
+
+
+def test_render_flags_are_checked_before_the_rollout(tmp_path, capsys, monkeypatch):
+  from tests.test_pictures_videos import TINY, saved_run as make_saved_run
+
+  run_dir = tmp_path / "run"
+  make_saved_run(run_dir, TINY)
+
+  def no_rollout(*args, **kwargs):
+    raise AssertionError("the rollout ran")
+
+  monkeypatch.setattr(videos, "episode_states", no_rollout)
+  before = sorted(p.name for p in run_dir.rglob("*"))
+  for flags, fragment in ((["--height", "100000"], "--height must be between 1 and 480"),
+                          (["--width", "0"], "--width must be between 1 and 640"),
+                          (["--frame", "99999"], "--frame must be between 0 and 99"),
+                          (["--frame", "-1"], "--frame must be between 0 and 99"),
+                          (["--seed", str(2**64)], "--seed must be a whole number"),
+                          (["--episodes", "0"], "--episodes must be at least 1")):
+    assert cli.main(["render", str(run_dir), "--task", "valve1", *flags]) == 2
+    one_error_line(capsys, fragment)
+  assert sorted(p.name for p in run_dir.rglob("*")) == before
+
+
+def test_tensorboard_takes_non_finite_values_without_warnings(tmp_path, capfd):
+  with logs.TensorBoard(tmp_path) as board:
+    board.write({"step": 1, "env_steps": 20, "loss": math.nan, "a/return": math.inf}, "train")
+  scalars = tensorboard_scalars(tmp_path / logs.TENSORBOARD_DIR)
+  assert math.isnan(scalars["train/loss"][0][1]) and scalars["a/return"] == [(20, math.inf)]
+  assert capfd.readouterr().err == ""
