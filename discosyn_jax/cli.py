@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import pathlib
+import shlex
 import sys
 import time
 
@@ -129,8 +130,22 @@ def cmd_train(args) -> None:
   config = train_config(args, base)
   devices.mesh_for(config, args.devices)  # a bad device count fails before the run directory
   print(f"run directory: {out}")
-  loop.train(config, out, resume=args.resume, force=args.force, progress=not args.no_progress,
-             devices=args.devices)
+  done = loop.train(config, out, resume=args.resume, force=args.force,
+                    progress=not args.no_progress, devices=args.devices)
+  print(next_commands(out, done["state"].step, config, done["results"]))
+
+
+def next_commands(out: pathlib.Path, step, config, results) -> str:
+  """What to do with a finished run, its folder filled in."""
+  run = shlex.quote(str(out))
+  best = max(config.tasks, key=lambda t: results[t]["success"])
+  lines = ["next:"]
+  if config.decoder != "identity":
+    lines.append(f"  discosyn synergies {run}                 # the hand along each synergy")
+  lines += [f"  discosyn render {run} --task {best}    # a video of the policy on {best}",
+            f"  discosyn eval {run}                      # evaluate the run again",
+            f"  discosyn train --out {run} --resume --steps {2 * int(step)}   # train for longer"]
+  return "\n".join(lines)
 
 
 def cmd_eval(args) -> None:

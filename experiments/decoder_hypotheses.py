@@ -31,6 +31,7 @@ VARIANTS = {
     "squash-random": dict(squash_z=True, freeze_decoder=True),
     "nobias": dict(decoder_bias=False),  # the paper's a = z phi
     "decoder-noise": dict(init_z_std=0.3, init_action_std=0.6),  # exploration in 20-D, not 3-D
+    "squash-decoder-noise": dict(squash_z=True, init_z_std=0.3, init_action_std=0.6),
     "alpha2x10": dict(alpha2=0.1),
     "calm-ppo": dict(update_epochs=2, learning_rate=1e-4),  # smaller PPO steps
 }

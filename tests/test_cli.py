@@ -34,3 +34,17 @@ def test_bad_input_is_one_line_and_exit_2():
     assert out.returncode == 2
     errors = [l for l in out.stderr.splitlines() if l.startswith("discosyn: error:")]
     assert len(errors) == 1, out.stderr
+
+
+def test_a_finished_run_ends_with_the_next_commands_filled_in(tmp_path):
+  from discosyn_jax.config import TrainConfig
+
+  config = TrainConfig(tasks=("valve0", "valve3"), steps=40)
+  results = {"valve0": {"success": 0.9, "return": 1.0}, "valve3": {"success": 0.2, "return": 0.0}}
+  text = cli.next_commands(tmp_path / "my run", 40, config, results)
+  run = f"'{tmp_path / 'my run'}'"  # quoted: a folder name with a space still pastes
+  assert f"discosyn synergies {run}" in text
+  assert f"discosyn render {run} --task valve0" in text  # the best-solved task
+  assert f"discosyn train --out {run} --resume --steps 80" in text
+  ppo = cli.next_commands(tmp_path, 40, config.replace(decoder="identity"), results)
+  assert "synergies" not in ppo
