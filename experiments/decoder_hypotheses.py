@@ -1,5 +1,5 @@
 """Why does the DiscoSyn decoder not learn (issue 13)? One variant of `set1-disco3-linear`
-per hypothesis, trained and summarised side by side.
+(as it was before z was bounded, unless a variant says) per hypothesis, trained and summarised side by side.
 
   python experiments/decoder_hypotheses.py --variants baseline squash --seeds 0 1 --steps 100
   python experiments/decoder_hypotheses.py --summary runs/hypotheses      # the table only
@@ -25,15 +25,15 @@ from experiments import presets  # noqa: E402
 
 # variant -> TrainConfig changes to set1-disco3-linear (one hypothesis each)
 VARIANTS = {
-    "baseline": {},
-    "random": dict(freeze_decoder=True),  # the control: the decoder frozen at its start
-    "squash": dict(squash_z=True),  # z bounded: a = W tanh(z) + c
+    "baseline": dict(squash_z=False),  # the preset as it was before issue 13
+    "random": dict(squash_z=False, freeze_decoder=True),  # its control: decoder frozen at start
+    "squash": dict(squash_z=True),  # z bounded: a = W tanh(z) + c (the preset since issue 13)
     "squash-random": dict(squash_z=True, freeze_decoder=True),
-    "nobias": dict(decoder_bias=False),  # the paper's a = z phi
-    "decoder-noise": dict(init_z_std=0.3, init_action_std=0.6),  # exploration in 20-D, not 3-D
+    "nobias": dict(squash_z=False, decoder_bias=False),  # the paper's a = z phi
+    "decoder-noise": dict(squash_z=False, init_z_std=0.3, init_action_std=0.6),  # 20-D exploring
     "squash-decoder-noise": dict(squash_z=True, init_z_std=0.3, init_action_std=0.6),
-    "alpha2x10": dict(alpha2=0.1),
-    "calm-ppo": dict(update_epochs=2, learning_rate=1e-4),  # smaller PPO steps
+    "alpha2x10": dict(squash_z=False, alpha2=0.1),
+    "calm-ppo": dict(squash_z=False, update_epochs=2, learning_rate=1e-4),  # smaller PPO steps
 }
 
 

@@ -51,18 +51,23 @@ class Scale:
   train: dict[str, Any]  # TrainConfig fields
   collect_episodes: int  # deterministic episodes per task behind PCA / autoencoder
   autoencoder_steps: int
+  seeds: tuple[int, ...]  # the seeds an experiment runs unless told otherwise
 
 
 SCALES = {
     # seconds per run: the pipeline's plumbing, nothing learned
     "ci": Scale(dict(num_envs=4, unroll_length=5, num_minibatches=2, update_epochs=1, steps=2,
-                     eval_every=1, eval_envs=2, checkpoint_every=0), 2, 50),
-    # minutes per run on a 2-core CPU: 512 k env steps for a four-task run
+                     eval_every=1, eval_envs=2, checkpoint_every=0), 2, 50, (0,)),
+    # a 2-core CPU: 1.5 M env steps for a four-task run (~5 min alone); Table I at this scale
+    # (DiscoSyn, its random-decoder controls and the baselines: 13 runs x 3 seeds) takes
+    # about 3.5 hours
     "cpu": Scale(dict(num_envs=64, unroll_length=20, num_minibatches=4, update_epochs=4,
-                      steps=100, eval_every=25, eval_envs=32, checkpoint_every=50), 32, 3000),
+                      steps=300, eval_every=50, eval_envs=32, checkpoint_every=100), 32, 3000,
+                 (0, 1, 2)),
     # one GPU: 2048 envs per task, 98 M env steps for a four-task run
     "gpu": Scale(dict(num_envs=2048, unroll_length=20, num_minibatches=16, update_epochs=4,
-                      steps=600, eval_every=25, eval_envs=256, checkpoint_every=100), 256, 20000),
+                      steps=600, eval_every=25, eval_envs=256, checkpoint_every=100), 256, 20000,
+                 (0, 1, 2)),
 }
 
 
@@ -247,7 +252,7 @@ EXPERIMENTS = ("discosyn-set1", "discosyn-set2", "baselines-set1", "baselines-se
                "sparse", "all")
 
 
-def run(experiment: str, out: pathlib.Path, scale: str, seeds=(0,), *,
+def run(experiment: str, out: pathlib.Path, scale: str, seeds=None, *,
         make_trainer: Callable[[TrainConfig], Any] | None = None, task_sets=None,
         decoder_from=None, progress: bool = False, log=print) -> list[pathlib.Path]:
   """Run (or continue) one experiment for every seed; the folders of its steps.
@@ -259,6 +264,8 @@ def run(experiment: str, out: pathlib.Path, scale: str, seeds=(0,), *,
   if make_trainer is None:
     from discosyn_jax.train import Trainer as make_trainer
   out = pathlib.Path(out)
+  if seeds is None:
+    seeds = SCALES[scale].seeds if scale in SCALES else (0,)
   plans = [Planner(out, scale, seed, task_sets, decoder_from).plan(experiment) for seed in seeds]
   folders = []
   for steps in plans:
