@@ -206,21 +206,23 @@ def cmd_report(args) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-  parser = argparse.ArgumentParser(prog="discosyn", description=__doc__)
-  sub = parser.add_subparsers(dest="command", required=True)
-
   from experiments import presets  # TrainConfig only, no JAX
 
+  parser = argparse.ArgumentParser(prog="discosyn", description=__doc__)
+  sub = parser.add_subparsers(dest="command", required=True)
   quick = presets.PRESETS["quickstart"]
 
   def preset_default(field: str, what: str = "") -> str:
-    return f"default: the preset's; quickstart's is {getattr(quick, field)}{what}"
+    value = getattr(quick, field)
+    value = " ".join(value) if isinstance(value, tuple) else value
+    return f"default: the preset's; quickstart's is {value}{what}"
 
   p = sub.add_parser("train", help="train synergies and policies (a preset, flags replace fields)")
-  p.add_argument("--preset", help=f"a named config, experiments/presets.py: {', '.join(presets.PRESETS)} "
-                 "(default: quickstart; with --resume: the run's own)")
+  p.add_argument("--preset", help="a named config of experiments/presets.py: "
+                 f"{', '.join(presets.PRESETS)} (default: quickstart; with --resume: the run's "
+                 "own)")
   p.add_argument("--tasks", nargs="+", help="tasks or task sets, e.g. set1 valve_cw (`discosyn "
-                 "tasks` lists them); default: the preset's; quickstart's is set1")
+                 "tasks` lists them); " + preset_default("tasks"))
   p.add_argument("--synergies", type=int, help="synergy count b, the size of z (1-20); "
                  + preset_default("n_synergies"))
   p.add_argument("--decoder", help="linear | mlp | identity (full-action PPO); "
@@ -256,8 +258,8 @@ def build_parser() -> argparse.ArgumentParser:
                  "CPU), mjx, or auto (native on a CPU, mjx on an accelerator); "
                  + preset_default("backend"))
   p.add_argument("--decoder-from", help="learn in the frozen synergy space of a run folder or a "
-                 "synergy file (.npz): its decoder, no discriminator bonus or decoder entropy (default: none, "
-                 "the decoder is learned)")
+                 "synergy file (.npz): its decoder, no discriminator bonus or decoder entropy "
+                 "(default: none, the decoder is learned)")
   p.add_argument("--out", help="run directory (default: runs/<preset>-seed<seed>)")
   p.add_argument("--resume", action="store_true", help="continue the run in --out")
   p.add_argument("--force", action="store_true", help="replace the run in --out")
