@@ -372,13 +372,13 @@ def add_bench_parser(sub) -> None:
 def main(argv: list[str] | None = None) -> int:
   args = build_parser().parse_args(argv)
   import discosyn_jax
-  from discosyn_jax.loop import TrainingDiverged
 
   if getattr(args, "distributed", False):  # before anything touches a device
     from discosyn_jax import devices
 
     devices.initialize_distributed()
-  discosyn_jax.setup_jax()
+  discosyn_jax.setup_jax()  # before anything imports MJX (brax, through loop)
+  from discosyn_jax.loop import TrainingDiverged
   try:
     if getattr(args, "batch", 1) < 1:
       raise UsageError(f"--batch must be at least 1, not {args.batch}")

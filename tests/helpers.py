@@ -1,6 +1,7 @@
 """Small shared pieces of the tests."""
 
 import functools
+import os
 
 import jax
 import jax.numpy as jnp
@@ -9,6 +10,8 @@ from mujoco import mjx
 
 import tasks
 from discosyn_jax.rollouts import run_episode  # noqa: F401  (the tests' episodes)
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # the checkout
 
 
 def uniform_policy(t, key, batch):
