@@ -1,4 +1,6 @@
-"""The `discosyn` command: train, eval, synergies, render, experiment, tasks, demo, render-scenes."""
+"""The `discosyn` command: train, eval, synergies, render, experiment, report, bench, demo,
+tasks, render-scenes. Each command imports what it needs when it runs, so that `--help`
+answers without JAX."""
 
 from __future__ import annotations
 
@@ -202,10 +204,11 @@ def cmd_experiment(args) -> None:
   from experiments import paper
 
   out = pathlib.Path(args.out)
-  print(f"experiment {args.name} at scale {args.scale}, seeds {' '.join(map(str, args.seeds))}, "
+  seeds = tuple(args.seeds) if args.seeds else paper.SCALES[args.scale].seeds
+  print(f"experiment {args.name} at scale {args.scale}, seeds {' '.join(map(str, seeds))}, "
         f"in {out}")
   start = time.perf_counter()
-  paper.run(args.name, out, args.scale, tuple(args.seeds), decoder_from=args.decoder_from,
+  paper.run(args.name, out, args.scale, seeds, decoder_from=args.decoder_from,
             progress=args.progress)
   print(f"experiment {args.name} finished in {(time.perf_counter() - start) / 60:.1f} min")
 
@@ -219,41 +222,81 @@ def cmd_report(args) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
+  from experiments import presets  # TrainConfig only, no JAX
+
   parser = argparse.ArgumentParser(prog="discosyn", description=__doc__)
   sub = parser.add_subparsers(dest="command", required=True)
+  quick = presets.PRESETS["quickstart"]
+
+  def preset_default(field: str, what: str = "") -> str:
+    value = getattr(quick, field)
+    value = " ".join(value) if isinstance(value, tuple) else value
+    return f"default: the preset's; quickstart's is {value}{what}"
 
   p = sub.add_parser("train", help="train synergies and policies (a preset, flags replace fields)")
-  p.add_argument("--preset", help="a preset of experiments/presets.py (default: quickstart; "
-                 "with --resume: the run's own config)")
-  p.add_argument("--tasks", nargs="+", help="tasks or task sets (default: the preset's)")
-  p.add_argument("--synergies", type=int, help="synergy count b (1-20)")
-  p.add_argument("--decoder", help="linear | mlp | identity (full-action PPO)")
-  for name in ("alpha1", "alpha2", "alpha3", "lr"):
-    p.add_argument(f"--{name}", type=float)
-  for name in ("num-envs", "unroll-length", "minibatches", "epochs", "steps", "seed",
-               "eval-every", "eval-envs", "checkpoint-every"):
-    p.add_argument(f"--{name}", type=int)
-  p.add_argument("--backend", choices=["auto", "native", "mjx"])
+  p.add_argument("--preset", help="a named config of experiments/presets.py: "
+                 f"{', '.join(presets.PRESETS)} (default: quickstart; with --resume: the run's "
+                 "own)")
+  p.add_argument("--tasks", nargs="+", help="tasks or task sets, e.g. set1 valve_cw (`discosyn "
+                 "tasks` lists them); " + preset_default("tasks"))
+  p.add_argument("--synergies", type=int, help="synergy count b, the size of z (1-20); "
+                 + preset_default("n_synergies"))
+  p.add_argument("--decoder", help="linear | mlp | identity (full-action PPO); "
+                 + preset_default("decoder"))
+  p.add_argument("--alpha1", type=float, help="weight of the entropy bonus H(pi(z|s,n)) in the "
+                 "loss (paper Eq. 2); " + preset_default("alpha1"))
+  p.add_argument("--alpha2", type=float, help="weight of the discriminator reward log q(z|a), "
+                 "added to the reward of every control step; " + preset_default("alpha2"))
+  p.add_argument("--alpha3", type=float, help="weight of the decoder entropy bonus H(p(a|z)) in "
+                 "the loss; " + preset_default("alpha3"))
+  p.add_argument("--lr", type=float, help="Adam learning rate of the policy, value and decoder "
+                 "networks; " + preset_default("learning_rate"))
+  p.add_argument("--num-envs", type=int, help="parallel envs per task; "
+                 + preset_default("num_envs", " envs"))
+  p.add_argument("--unroll-length", type=int, help="control steps every env takes per train step; "
+                 + preset_default("unroll_length", " steps"))
+  p.add_argument("--minibatches", type=int, help="minibatches per PPO epoch; "
+                 + preset_default("num_minibatches"))
+  p.add_argument("--epochs", type=int, help="PPO epochs over each train step's samples; "
+                 + preset_default("update_epochs"))
+  p.add_argument("--steps", type=int, help="train steps in all (a resumed run counts those done); "
+                 "one train step is tasks x num-envs x unroll-length env (control) steps, "
+                 f"quickstart's {quick.env_steps_per_train_step:,}; " + preset_default("steps"))
+  p.add_argument("--seed", type=int, help="seed of the initial networks, initial states and "
+                 "training noise; " + preset_default("seed"))
+  p.add_argument("--eval-every", type=int, help="train steps between deterministic evaluations, "
+                 "0: only at the end; " + preset_default("eval_every", " train steps"))
+  p.add_argument("--eval-envs", type=int, help="episodes per task in an evaluation; "
+                 + preset_default("eval_envs", " episodes"))
+  p.add_argument("--checkpoint-every", type=int, help="train steps between checkpoints, 0: only "
+                 "the final one; " + preset_default("checkpoint_every", " train steps"))
+  p.add_argument("--backend", choices=["auto", "native", "mjx"], help="physics: native (MuJoCo C, "
+                 "CPU), mjx, or auto (native on a CPU, mjx on an accelerator); "
+                 + preset_default("backend"))
   p.add_argument("--decoder-from", help="learn in the frozen synergy space of a run folder or a "
-                 "synergy file (.npz): its decoder, no discriminator bonus or decoder entropy")
+                 "synergy file (.npz): its decoder, no discriminator bonus or decoder entropy "
+                 "(default: none, the decoder is learned)")
   p.add_argument("--out", help="run directory (default: runs/<preset>-seed<seed>)")
   p.add_argument("--resume", action="store_true", help="continue the run in --out")
   p.add_argument("--force", action="store_true", help="replace the run in --out")
-  p.add_argument("--no-progress", action="store_true", help="no progress bar")
+  p.add_argument("--no-progress", action="store_true", help="no progress bar (it is a line every "
+                 "tenth of the run when stderr is not a terminal)")
   add_device_flags(p)
   p.set_defaults(fn=cmd_train)
 
   p = sub.add_parser("eval", help="evaluate a run (its latest checkpoint) or one checkpoint")
   p.add_argument("run", help="a run directory or a checkpoint folder in one")
   p.add_argument("--episodes", type=int, help="episodes per task (default: the run's eval_envs)")
-  p.add_argument("--backend", choices=["auto", "native", "mjx"])
+  p.add_argument("--backend", choices=["auto", "native", "mjx"],
+                 help="physics backend (default: the run's)")
   p.set_defaults(fn=cmd_eval)
 
   p = sub.add_parser("synergies", help="pictures of a run's synergies: the hand along each "
                      "synergy, and the matrix of a linear decoder (needs EGL or OSMesa)")
   p.add_argument("run", help="a run directory or a checkpoint folder in one")
   p.add_argument("--out", help="folder for postures.png and matrix.png (default: RUN/synergies)")
-  p.add_argument("--k", type=float, default=1.0, help="the hand is shown at z = -k, 0, +k")
+  p.add_argument("--k", type=float, default=1.0, help="the hand is shown at z = -k, 0, +k "
+                 "(in units of z, whose prior is a unit normal; default: %(default)s)")
   p.add_argument("--force", action="store_true", help="replace pictures already there")
   p.set_defaults(fn=cmd_synergies)
 
@@ -263,14 +306,15 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("--task", required=True, help="one of the run's tasks")
   p.add_argument("--out", help="an .mp4 or .gif file, a .png with --frame (default: "
                  "RUN/videos/TASK.mp4, TASK-frameN.png)")
-  p.add_argument("--episodes", type=int, default=1, help="episodes, one after another")
+  p.add_argument("--episodes", type=int, default=1, help="episodes, one after another (default: %(default)s)")
   p.add_argument("--frame", type=int, help="write only this control step of the first episode "
-                 "as a PNG")
-  p.add_argument("--seed", type=int, default=0, help="draws the episodes' initial states")
+                 "as a PNG (default: none, the whole video)")
+  p.add_argument("--seed", type=int, default=0, help="draws the episodes' initial states "
+                 "(default: %(default)s)")
   p.add_argument("--camera", action="append", choices=["front", "oblique"],
                  help="a view, side by side when repeated (default: front and oblique)")
-  p.add_argument("--height", type=int, default=360, help="pixels per view (at most 480)")
-  p.add_argument("--width", type=int, default=480, help="pixels per view (at most 640)")
+  p.add_argument("--height", type=int, default=360, help="pixels per view (at most 480; default: %(default)s)")
+  p.add_argument("--width", type=int, default=480, help="pixels per view (at most 640; default: %(default)s)")
   p.add_argument("--force", action="store_true", help="replace the file if it exists")
   p.set_defaults(fn=cmd_render)
 
@@ -278,46 +322,58 @@ def build_parser() -> argparse.ArgumentParser:
                      "(experiments/paper.py); finished steps are kept, unfinished ones resumed")
   p.add_argument("name", help="discosyn-set1 | discosyn-set2 | baselines-set1 | baselines-set2 | "
                  "transfer | sparse | all")
-  p.add_argument("--scale", default="cpu", help="ci (seconds per run) | cpu (minutes) | gpu")
-  p.add_argument("--seeds", type=int, nargs="+", default=[0])
-  p.add_argument("--out", default="runs/experiments", help="folder of the experiment's runs")
+  p.add_argument("--scale", default="cpu", help="ci (seconds per run) | cpu (minutes per run on "
+                 "2 cores) | gpu (one accelerator); default: %(default)s")
+  p.add_argument("--seeds", type=int, nargs="+",
+                 help="training seeds: every step runs once per seed (default: the scale's, "
+                 "0 1 2 for cpu and gpu, 0 for ci)")
+  p.add_argument("--out", default="runs/experiments",
+                 help="folder of the experiment's runs (default: %(default)s)")
   p.add_argument("--decoder-from", help="transfer / sparse: the frozen decoder of this run folder "
-                 "or synergy file, instead of training their own DiscoSyn run first")
+                 "or synergy file, instead of training their own DiscoSyn run first (default: none)")
   p.add_argument("--progress", action="store_true", help="a progress bar per run")
   p.set_defaults(fn=cmd_experiment)
 
   p = sub.add_parser("report", help="REPORT.md and figures from run folders: solved tasks, "
                      "explained variance, curves, t-SNE, transfer, sparse reward")
   p.add_argument("runs", nargs="+", help="run folders, synergy-fit folders, or folders of them")
-  p.add_argument("--out", default="report", help="folder for REPORT.md and its figures")
+  p.add_argument("--out", default="report",
+                 help="folder for REPORT.md and its figures (default: %(default)s)")
   p.add_argument("--threshold", type=float, default=0.8,
-                 help="final success rate at or above which a task counts as solved")
+                 help="final success rate (a fraction, 0-1) at or above which a task counts as "
+                 "solved (default: %(default)s)")
   p.add_argument("--no-tsne", action="store_true", help="skip the t-SNE (it rolls policies out)")
   p.add_argument("--force", action="store_true", help="replace a report already in --out")
   p.set_defaults(fn=cmd_report)
 
   p = sub.add_parser("demo", help="build task scenes, step them with random actions, print figures")
   p.add_argument("tasks", nargs="*", default=["set1"], help="tasks or task sets (default: set1)")
-  p.add_argument("--backend", default="auto", choices=["auto", "native", "mjx"])
-  p.add_argument("--batch", type=int, default=16, help="parallel envs per task")
-  p.add_argument("--seed", type=int, default=0)
+  p.add_argument("--backend", default="auto", choices=["auto", "native", "mjx"],
+                 help="physics backend (default: %(default)s: native on a CPU, mjx on an "
+                 "accelerator)")
+  p.add_argument("--batch", type=int, default=16, help="parallel envs per task (default: "
+                 "%(default)s)")
+  p.add_argument("--seed", type=int, default=0, help="seed of the initial states and actions "
+                 "(default: %(default)s)")
   p.set_defaults(fn=cmd_demo)
 
   p = sub.add_parser("tasks", help="list the tasks with observation size and set membership")
   p.set_defaults(fn=cmd_tasks)
 
   p = sub.add_parser("render-scenes", help="write a PNG of each task scene (needs EGL or OSMesa)")
-  p.add_argument("tasks", nargs="*", default=["set1"])
-  p.add_argument("--out", default="docs/scenes")
-  p.add_argument("--step", type=int, default=14, help="control steps of the scripted motion first")
-  p.add_argument("--seed", type=int, default=0)
+  p.add_argument("tasks", nargs="*", default=["set1"], help="tasks or task sets (default: set1)")
+  p.add_argument("--out", default="docs/scenes", help="folder for TASK.png (default: %(default)s)")
+  p.add_argument("--step", type=int, default=14, help="control steps of the task's scripted motion "
+                 "before the picture (default: %(default)s)")
+  p.add_argument("--seed", type=int, default=0, help="draws the initial state (default: %(default)s)")
   p.set_defaults(fn=cmd_render_scenes)
   add_bench_parser(sub)
   return parser
 
 
 def add_device_flags(p) -> None:
-  p.add_argument("--devices", type=int, help="devices to split the env batch over (default: all)")
+  p.add_argument("--devices", type=int, help="devices to split the env batch over (default: all "
+                 "of them)")
   p.add_argument("--distributed", action="store_true",
                  help="multi-host: jax.distributed.initialize() first (docs/SCALING.md)")
 
@@ -331,13 +387,15 @@ def add_bench_parser(sub) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-  from discosyn_jax.loop import TrainingDiverged
-
   args = build_parser().parse_args(argv)
+  import discosyn_jax
+
   if getattr(args, "distributed", False):  # before anything touches a device
     from discosyn_jax import devices
 
     devices.initialize_distributed()
+  discosyn_jax.setup_jax()  # before anything imports MJX (brax, through loop)
+  from discosyn_jax.loop import TrainingDiverged
   try:
     if getattr(args, "batch", 1) < 1:
       raise UsageError(f"--batch must be at least 1, not {args.batch}")

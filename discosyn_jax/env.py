@@ -70,6 +70,8 @@ class HandEnv(Env):
     reward = sum(terms.values())
     done = jnp.maximum(self.task.terminated(view, info), diverged)
     obs = jnp.nan_to_num(self.task.observation(view, info), posinf=0.0, neginf=0.0)
-    metrics = {f"reward/{k}": v for k, v in terms.items()}
+    # the state's metrics updated, not replaced: keys that wrappers add (Brax's EvalWrapper
+    # adds "reward") must keep the state's structure through Brax's scans
+    metrics = {**state.metrics, **{f"reward/{k}": v for k, v in terms.items()}}
     metrics.update(success=self.task.success(view, info) * (1.0 - diverged), diverged=diverged)
     return state.replace(pipeline_state=pstate, obs=obs, reward=reward, done=done, metrics=metrics)

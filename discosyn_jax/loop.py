@@ -13,6 +13,7 @@ import math
 import os
 import pathlib
 import shutil
+import sys
 import time
 from typing import Any
 
@@ -271,9 +272,10 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, f
           raise TrainingDiverged(f"non-finite loss or parameters at step {step}; training stopped, "
                                  f"{_where(last_good)}")
         if bar is not None:
-          bar.update(1)
           shown.update({n: metrics[f"{n}/success"] for n in config.tasks if f"{n}/success" in metrics})
-          bar.set_postfix_str(" ".join(f"{n}:{v:.0%}" for n, v in list(shown.items())[:6]))
+          bar.set_postfix_str(" ".join(f"{n}:{v:.0%}" for n, v in list(shown.items())[:6]),
+                              refresh=False)
+          bar.update(1)
         if _evaluates_at(config, step):
           _log_eval((eval_file, board), evaluate(trainer, state), step, config, now - start)
         if config.checkpoint_every and step % config.checkpoint_every == 0:
@@ -337,9 +339,35 @@ def _log_eval(outputs, results, step, config, wall_s):
 
 
 def _progress(enabled: bool, start: int, total: int):
+  """A tqdm bar on a terminal; elsewhere (a log file, a notebook's captured stderr) one
+  line every tenth of the run, since a bar's carriage returns would flood the log."""
   if not enabled:
     return None
+  if not sys.stderr.isatty():
+    return _ProgressLines(start, total, every=max(1, total // 10))
   from tqdm import tqdm
 
   return tqdm(total=total, initial=start, unit="step", dynamic_ncols=True)
+
+
+class _ProgressLines:
+  """The part of tqdm's interface the loop uses, as plain lines on stderr."""
+
+  def __init__(self, start: int, total: int, every: int):
+    self.n, self.start, self.total, self.every, self.postfix = start, start, total, every, ""
+    self.began = time.perf_counter()
+
+  def update(self, n: int) -> None:
+    self.n += n
+    if self.n % self.every == 0 or self.n == self.total:
+      rate = (self.n - self.start) / (time.perf_counter() - self.began)
+      print(f"step {self.n}/{self.total}, {rate:.2f} steps/s {self.postfix}".rstrip(),
+            file=sys.stderr, flush=True)
+
+  def set_postfix_str(self, text: str, refresh: bool = True) -> None:
+    del refresh  # a line is written by update() only
+    self.postfix = text
+
+  def close(self) -> None:
+    pass
 

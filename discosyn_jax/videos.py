@@ -55,18 +55,20 @@ def episode_states(trainer, state, task: str, episodes: int, seed: int = 0
 def write_video(frames: Iterator[np.ndarray], path: pathlib.Path, fps: float) -> int:
   """Write `frames` (uint8, H x W x 3) to an MP4 or GIF by the suffix; return the frame count."""
   suffix = pathlib.Path(path).suffix.lower()
-  if suffix == ".mp4":
-    # macro_block_size 8: the default 16 would rescale 360-pixel-high frames
-    writer = imageio.get_writer(path, fps=fps, macro_block_size=8)
-  else:
-    writer = imageio.get_writer(path, duration=1000 / fps, loop=0)
   count = 0
-  # imageio-ffmpeg forks its ffmpeg; JAX warns about any fork, here harmlessly (exec follows)
-  with writer, warnings.catch_warnings():
+  # imageio-ffmpeg runs ffmpeg in a subprocess (a probe when the writer is made, the encoder
+  # at the first frame); JAX warns about any fork, here harmlessly (exec follows)
+  with warnings.catch_warnings():
     warnings.filterwarnings("ignore", message="os.fork", category=RuntimeWarning)
-    for frame in frames:
-      writer.append_data(frame)
-      count += 1
+    if suffix == ".mp4":
+      # macro_block_size 8: the default 16 would rescale 360-pixel-high frames
+      writer = imageio.get_writer(path, fps=fps, macro_block_size=8)
+    else:
+      writer = imageio.get_writer(path, duration=1000 / fps, loop=0)
+    with writer:
+      for frame in frames:
+        writer.append_data(frame)
+        count += 1
   return count
 
 

@@ -29,17 +29,20 @@ import platform
 import resource
 import statistics
 import time
+from typing import TYPE_CHECKING
 
-import jax
-import mujoco
 import numpy as np
-from mujoco import rollout
 
-from discosyn_jax import checks, ppo
-from discosyn_jax.train import Trainer
+if TYPE_CHECKING:
+  from discosyn_jax.train import Trainer
+
+# JAX, MuJoCo and the trainer are imported where they are used: `discosyn --help` builds
+# this parser without them.
 
 
 def native_threads() -> int:
+  from discosyn_jax import checks
+
   return checks.env_int("DISCOSYN_NATIVE_THREADS", os.cpu_count() or 1)
 
 
@@ -48,6 +51,9 @@ class RawRollout:
   initial state, random controls held for the task's substeps."""
 
   def __init__(self, env, batch: int, steps: int, nthread: int):
+    import mujoco
+    from mujoco import rollout
+
     self.model, n = env.mj_model, env.task.config.n_substeps
     self.data = [mujoco.MjData(self.model) for _ in range(nthread)]
     mujoco.mj_forward(self.model, self.data[0])
@@ -68,6 +74,8 @@ class RawRollout:
 
 def physics_runner(envs, batch: int, steps: int):
   """(a function that steps every env `steps` times at `batch`, compile seconds)."""
+  import jax
+
   key = jax.random.PRNGKey(0)
   states = [jax.jit(jax.vmap(env.reset))(jax.random.split(key, batch)) for env in envs]
   actions = jax.random.uniform(key, (steps, batch, envs[0].action_size), minval=-1, maxval=1)
@@ -107,6 +115,10 @@ class CallbackClock:
 
 def update_runner(trainer: Trainer, state):
   """The PPO update of a train step alone, on random samples of the step's shapes."""
+  import jax
+
+  from discosyn_jax import ppo
+
   n = trainer.config.num_envs * trainer.config.unroll_length
   keys = iter(jax.random.split(jax.random.PRNGKey(0), 6 * len(trainer.obs_sizes)))
   normal = lambda *shape: jax.random.normal(next(keys), (n, *shape))
@@ -122,6 +134,8 @@ def update_runner(trainer: Trainer, state):
 
 
 def peak_memory_gib() -> float:
+  import jax
+
   device = jax.devices()[0]
   stats = device.memory_stats() if device.platform != "cpu" else None
   if stats and "peak_bytes_in_use" in stats:
@@ -141,6 +155,10 @@ def _median_range(values) -> str:
 
 def bench_row(config, args) -> dict:
   """Every figure of one backend and batch: see the module docstring."""
+  import jax
+
+  from discosyn_jax.train import Trainer
+
   trainer = Trainer(config, devices=args.devices) if args.train else None
   envs = trainer.envs if trainer else _envs(config)
   clock = CallbackClock(envs)
@@ -199,19 +217,30 @@ def _envs(config):
 
 def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.ArgumentParser:
   parser = parser or argparse.ArgumentParser(description=__doc__.splitlines()[0])
-  parser.add_argument("--preset", default="set1-disco3-linear", help="the training config")
+  parser.add_argument("--preset", default="set1-disco3-linear",
+                      help="the training config, a name in experiments/presets.py (default: "
+                      "%(default)s)")
   parser.add_argument("--tasks", nargs="+", help="tasks or task sets (default: the preset's)")
-  parser.add_argument("--backends", nargs="+", default=["native"], choices=["native", "mjx"])
-  parser.add_argument("--batches", type=int, nargs="+", help="envs per task (default: the preset's)")
+  parser.add_argument("--backends", nargs="+", default=["native"], choices=["native", "mjx"],
+                      help="physics backends, a row each (default: native)")
+  parser.add_argument("--batches", type=int, nargs="+",
+                      help="envs per task, a row each (default: the preset's num_envs)")
   parser.add_argument("--epochs", type=int, help="PPO epochs (default: the preset's)")
-  parser.add_argument("--steps", type=int, default=3, help="train steps per timing")
-  parser.add_argument("--repeats", type=int, default=3, help="interleaved timings per row")
-  parser.add_argument("--devices", type=int, help="devices to split the env batch over (default: all)")
-  parser.add_argument("--no-train", dest="train", action="store_false", help="physics only")
+  parser.add_argument("--steps", type=int, default=3,
+                      help="train steps per timing (default: %(default)s)")
+  parser.add_argument("--repeats", type=int, default=3,
+                      help="interleaved timings per row (default: %(default)s)")
+  parser.add_argument("--devices", type=int,
+                      help="devices to split the env batch over (default: all of them)")
+  parser.add_argument("--no-train", dest="train", action="store_false",
+                      help="physics only, no train steps")
   return parser
 
 
 def run(args) -> None:
+  import jax
+  import mujoco
+
   import tasks
   from experiments import presets
 

@@ -5,10 +5,13 @@ from __future__ import annotations
 import dataclasses
 from typing import Callable
 
-import discosyn_jax  # noqa: F401  (sets XLA flags before jax is imported)
-from discosyn_jax.env import HandEnv
-from discosyn_jax.task import Task, TaskConfig
-from tasks import dice, screw, valve, valve_goal, weight_pull
+import discosyn_jax  # sets XLA flags before jax is imported
+
+discosyn_jax.setup_jax()  # before brax (env.py) imports MJX
+
+from discosyn_jax.env import HandEnv  # noqa: E402
+from discosyn_jax.task import Task, TaskConfig  # noqa: E402
+from tasks import dice, screw, valve, valve_goal, weight_pull  # noqa: E402
 
 
 @dataclasses.dataclass(frozen=True)

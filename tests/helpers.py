@@ -1,11 +1,19 @@
 """Small shared pieces of the tests."""
 
+import functools
+import os
 import struct
 
 import jax
+import jax.numpy as jnp
+import numpy as np
+from mujoco import mjx
 from tensorboardX.proto import event_pb2
 
+import tasks
 from discosyn_jax.rollouts import run_episode  # noqa: F401  (the tests' episodes)
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # the checkout
 
 
 def uniform_policy(t, key, batch):
@@ -25,3 +33,25 @@ def tensorboard_scalars(folder) -> dict[str, list[tuple[int, float]]]:
       for value in event.summary.value:
         out.setdefault(value.tag, []).append((event.step, value.simple_value))
   return out
+
+
+@functools.cache
+def env(name: str, backend: str = "native"):
+  """One env per task and backend for the whole session (an MJX env traces its reset when
+  it is built). Tests that change a task's settings make their own."""
+  return tasks.make(name, backend=backend)
+
+
+def on_mjx(native_env, mjx_env, state):
+  """A state of `native_env` (one env or a batch) with its physics put on MJX: the host
+  MjData after MuJoCo C's forward, as `mjx.put_data` makes it. A test that starts MJX from
+  here compiles MJX's step only, not its reset too (each about half a minute on 2 cores);
+  MJX's reset itself is run by tests/test_backends.py."""
+  lead = state.reward.shape
+  host = jax.device_get(state.pipeline_state)
+  datas = [mjx.put_data(mjx_env.mj_model,
+                        native_env.physics.to_mjdata(jax.tree.map(lambda x: x[i], host)),
+                        impl=mjx_env.physics.impl)
+           for i in np.ndindex(lead)]
+  pstate = jax.tree.map(lambda *x: jnp.stack(x).reshape(lead + x[0].shape), *datas)
+  return state.replace(pipeline_state=pstate)

@@ -6,8 +6,8 @@ import mujoco
 import numpy as np
 import pytest
 
-import tasks
-from discosyn_jax import hand, physics, scripted
+from discosyn_jax import hand, physics
+from tests import helpers
 
 
 def test_auto_picks_native_on_cpu():
@@ -17,7 +17,7 @@ def test_auto_picks_native_on_cpu():
 
 
 def test_native_equals_plain_mj_step_bit_for_bit():
-  env = tasks.make("valve3", backend="native")
+  env = helpers.env("valve3")
   model = env.mj_model
   ctrls = np.random.default_rng(0).uniform(model.actuator_ctrlrange[:, 0], model.actuator_ctrlrange[:, 1], (30, model.nu))
   qpos0 = np.asarray(model.qpos0, np.float32) + 0.01
@@ -41,7 +41,7 @@ def test_native_equals_plain_mj_step_bit_for_bit():
     np.testing.assert_array_equal(np.asarray(states.qpos[t]), data.qpos.astype(np.float32))
 
 
-def test_native_and_mjx_trajectories_agree_on_valve3():
+def test_native_and_mjx_trajectories_agree_on_valve3(valve3_on_both_backends):
   """50 control steps (2 s) of a grasp-and-sweep that turns valve3, on both backends.
 
   Tolerance: hand joints within 0.02 rad, valve angle within 0.05 rad. MJX computes in
@@ -50,17 +50,14 @@ def test_native_and_mjx_trajectories_agree_on_valve3():
   friction (frictionloss) switches between stick and slip, which turns rounding into
   visible differences once the fingers push it (~0.025 rad measured on this sequence).
   """
-  actions = jnp.asarray(scripted.grasp_and_sweep(50, 0.04))
   trajectories = {}
-  for backend in ("native", "mjx"):
-    env = tasks.make("valve3", backend=backend)
-
-    def roll(key, env=env):
-      state = env.reset(key)
-      step = lambda s, a: (env.step(s, a),) * 2
-      return jax.lax.scan(step, state, actions)[1]
-
-    states = jax.jit(roll)(jax.random.PRNGKey(3))
+  for backend, (env, states) in valve3_on_both_backends.items():
+    # MJX's reset and step, jitted: shaped, finite, the task's metrics, no episode ended
+    assert states.obs.shape == (50, 27) and states.reward.shape == states.done.shape == (50,)
+    for leaf in jax.tree.leaves((states.obs, states.reward, states.metrics)):
+      assert np.isfinite(np.asarray(leaf)).all()
+    assert set(states.metrics) == {"reward/turn", "reward/bias", "success", "diverged"}
+    assert not np.asarray(states.done).any()
     trajectories[backend] = np.asarray(jax.vmap(env.physics.view)(states.pipeline_state).qpos)
   native, mjx = trajectories["native"], trajectories["mjx"]
   hand_q = hand.qpos_indices(env.mj_model)

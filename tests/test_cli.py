@@ -1,9 +1,42 @@
-"""The discosyn command: listing, the demo, bad input."""
+"""The discosyn command: its help, listing, the demo, bad input."""
 
+import argparse
 import subprocess
 import sys
 
 from discosyn_jax import cli
+from experiments import presets
+from tests.helpers import ROOT
+
+
+def subcommands(parser):
+  (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+  return sub.choices
+
+
+def test_every_flag_says_what_it_is_and_its_default():
+  for name, parser in subcommands(cli.build_parser()).items():
+    for action in parser._actions:
+      if isinstance(action, argparse._HelpAction):
+        continue
+      assert action.help, f"{name} {action.dest} has no help"
+      takes_value = action.nargs != 0 and not action.required
+      if takes_value:  # flags that take a value, and optional positionals
+        assert "default" in action.help, f"{name} {action.dest}: {action.help}"
+  train = subcommands(cli.build_parser())["train"]
+  (preset,) = [a for a in train._actions if a.dest == "preset"]
+  assert all(name in preset.help for name in presets.PRESETS)
+
+
+def test_help_lists_every_command_and_imports_no_jax():
+  code = ("import sys; from discosyn_jax import cli; print(cli.build_parser().format_help()); "
+          "print('HEAVY', sorted({'jax', 'mujoco', 'brax', 'flax', 'matplotlib'} & set(sys.modules)))")
+  out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+  assert out.returncode == 0, out.stderr
+  assert out.stdout.splitlines()[-1] == "HEAVY []"
+  listed = [line.split()[0] for line in out.stdout.splitlines()  # "    name   what it does"
+            if line.startswith("    ") and line[4] != " "]
+  assert set(listed) == set(subcommands(cli.build_parser())) >= {"train", "report", "bench"}
 
 
 def test_tasks_lists_every_task_with_sizes(capsys):
@@ -30,10 +63,12 @@ def test_demo_prints_a_row_per_task(capsys):
 
 def test_bad_input_is_one_line_and_exit_2():
   for argv in (["demo", "valve7"], ["demo", "valve1", "--batch", "0"]):
-    out = subprocess.run([sys.executable, "-m", "discosyn_jax.cli", *argv], capture_output=True, text=True)
+    out = subprocess.run([sys.executable, "-m", "discosyn_jax.cli", *argv], capture_output=True,
+                         text=True, cwd=ROOT)
     assert out.returncode == 2
     errors = [l for l in out.stderr.splitlines() if l.startswith("discosyn: error:")]
     assert len(errors) == 1, out.stderr
+    assert "Failed to import" not in out.stdout  # MJX's lines about the absent Warp
 
 
 def test_a_finished_run_ends_with_the_next_commands_filled_in(tmp_path):

@@ -21,6 +21,8 @@ def test_the_cache_folder_follows_the_environment(monkeypatch, tmp_path):
     jax.config.update("jax_compilation_cache_dir", before)
 
 
-def test_importing_the_package_turned_it_on():
+def test_setting_up_jax_turned_it_on():
+  import tasks  # noqa: F401  (sets JAX up, as the CLI does before a command)
+
   if compile_cache.folder() is not None:  # unless this run says off
     assert jax.config.jax_compilation_cache_dir == str(compile_cache.folder())

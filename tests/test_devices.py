@@ -9,13 +9,15 @@ import jax
 import pytest
 
 from discosyn_jax import devices
+from tests.helpers import ROOT
 
 
-def test_two_cpu_devices_give_the_one_device_results():
+def test_two_cpu_devices_give_the_one_device_results(tmp_path):
   # the device count is read when XLA starts: a process of its own (this one keeps 1 device)
-  env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=2")
+  env = dict(os.environ, PYTHONPATH=ROOT,
+             XLA_FLAGS=os.environ["XLA_FLAGS"] + " --xla_force_host_platform_device_count=2")
   run = subprocess.run([sys.executable, "-m", "tests.two_devices"], capture_output=True,
-                       text=True, env=env, cwd=os.path.dirname(os.path.dirname(__file__)))
+                       text=True, env=env, cwd=tmp_path)
   assert run.returncode == 0, run.stderr[-3000:]
   out = json.loads(run.stdout.strip().splitlines()[-1])
   assert out["toy_max_param_diff"] < 1e-4, out

@@ -1,5 +1,7 @@
 """tasks.make and the Brax Env interface."""
 
+import os
+import shutil
 import subprocess
 import sys
 import zipfile
@@ -12,6 +14,7 @@ import pytest
 from brax.envs.wrappers import training
 
 import tasks
+from tests import helpers
 
 
 def test_unknown_task_lists_known_names():
@@ -35,7 +38,7 @@ def test_task_set_1_and_overrides():
 
 
 def test_actions_map_to_joint_ranges_and_are_clipped():
-  env = tasks.make("valve3", backend="native")
+  env = helpers.env("valve3")
   lo, hi = env.mj_model.actuator_ctrlrange.T
   np.testing.assert_allclose(env.action_to_ctrl(-jnp.ones(20)), lo, atol=1e-6)
   np.testing.assert_allclose(env.action_to_ctrl(jnp.ones(20)), hi, atol=1e-6)
@@ -44,7 +47,7 @@ def test_actions_map_to_joint_ranges_and_are_clipped():
 
 
 def test_brax_training_wrappers_run_it():
-  env = training.wrap(tasks.make("valve1", backend="native"), episode_length=5)
+  env = training.wrap(helpers.env("valve1"), episode_length=5)
   state = jax.jit(env.reset)(jax.random.split(jax.random.PRNGKey(0), 3))
   step = jax.jit(env.step)
   dones = []
@@ -58,11 +61,39 @@ def test_brax_training_wrappers_run_it():
   assert "reward/turn" in state.metrics
 
 
+def _device_put_replicated(tree, devices):
+  """A stand-in for `jax.device_put_replicated`, removed in JAX 0.10 and still called by
+  Brax 0.14.2's `ppo.train`: a leading axis of one copy per device, which its pmap splits."""
+  return jax.tree.map(lambda x: jnp.stack([x] * len(devices)), tree)
+
+
+def test_brax_own_ppo_trains_and_evaluates_on_a_task(monkeypatch):
+  """Brax's trainer wraps the env in its own wrappers (EvalWrapper adds a "reward" metric):
+  their keys must survive the env's step."""
+  from brax.training.agents.ppo import train as brax_ppo
+
+  monkeypatch.setattr(jax, "device_put_replicated", _device_put_replicated, raising=False)
+  evaluations = []
+  _, params, metrics = brax_ppo.train(
+      helpers.env("valve1"), num_timesteps=40, episode_length=10, num_envs=4,
+      batch_size=4, unroll_length=5, num_minibatches=2, num_updates_per_batch=1, num_evals=2,
+      num_eval_envs=2, seed=0, progress_fn=lambda step, m: evaluations.append(step))
+  assert evaluations == [0, 40]  # one evaluation before training, one after its step
+  assert np.isfinite(metrics["eval/episode_reward"])
+  assert 0.0 <= metrics["eval/episode_success"] <= 10.0  # summed over the 10-step episode
+  assert "eval/episode_reward/turn" in metrics
+  assert all(np.isfinite(x).all() for x in jax.tree.leaves(params))
+
+
 def test_a_wheel_carries_the_xml_and_works_outside_the_checkout(tmp_path):
   """What a non-editable `pip install .` gets: tasks and the MJCF files from the wheel."""
   root = __import__("pathlib").Path(__file__).resolve().parents[1]
+  # built from a copy: setuptools writes build/ and *.egg-info next to the sources
+  source = tmp_path / "source"
+  shutil.copytree(root, source, ignore=shutil.ignore_patterns(
+      ".git", ".venv*", "runs", "build", "*.egg-info", "__pycache__", ".pytest_cache", "docs"))
   subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation",
-                  "-w", str(tmp_path / "wheel"), str(root)], check=True, capture_output=True)
+                  "-w", str(tmp_path / "wheel"), str(source)], check=True, capture_output=True)
   (wheel,) = (tmp_path / "wheel").glob("*.whl")
   with zipfile.ZipFile(wheel) as zf:
     names = set(zf.namelist())
@@ -72,7 +103,8 @@ def test_a_wheel_carries_the_xml_and_works_outside_the_checkout(tmp_path):
   code = ("import tasks, discosyn_jax.assets as a; env = tasks.make('valve3', backend='native');"
           "print('RESULT', tasks.__file__, a.xml_dir(), env.observation_size)")
   out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True,
-                       env={"PYTHONPATH": str(tmp_path / "site"), "PATH": "/usr/bin:/bin"})
+                       env={"PYTHONPATH": str(tmp_path / "site"), "PATH": "/usr/bin:/bin",
+                            "HOME": os.environ["HOME"], "DISCOSYN_JAX_CACHE": "off"})
   assert out.returncode == 0, out.stderr
   (line,) = [l for l in out.stdout.splitlines() if l.startswith("RESULT")]  # mjx prints too
   lines = line.split()[1:]

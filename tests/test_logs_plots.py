@@ -75,3 +75,17 @@ def test_curves_of_a_folder_without_a_run_or_without_steps_fail(tmp_path):
   with pytest.raises(ValueError, match="no training steps"):
     plots.run_curves(tmp_path, tmp_path / "out")
   assert not (tmp_path / "out").exists()
+
+
+def test_progress_off_a_terminal_is_a_line_every_tenth_of_the_run(capsys):
+  bar = loop._progress(True, 5, 40)  # resumed at step 5; pytest's stderr is not a terminal
+  for step in range(6, 41):
+    bar.set_postfix_str(f"valve1:{step}%", refresh=False)
+    bar.update(1)
+  bar.close()
+  err = capsys.readouterr().err
+  assert "\r" not in err
+  lines = err.splitlines()
+  assert [line.split(",")[0] for line in lines] == [f"step {n}/40" for n in range(8, 41, 4)]
+  assert lines[-1].endswith("steps/s valve1:40%")
+  assert loop._progress(False, 0, 40) is None

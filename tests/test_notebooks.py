@@ -8,7 +8,7 @@ from nbclient import NotebookClient
 
 NOTEBOOKS = pathlib.Path(__file__).resolve().parent.parent / "experiments" / "notebooks"
 
-TINY_PARAMETERS = '''REPO = "unused: the package is installed"
+TINY_PARAMETERS = '''REPO_URL = "unused: the package is installed"
 EXTRA = ""
 RUN = "runs/tiny"
 TRAIN_FLAGS = ["--tasks", "valve1", "--steps", "2", "--num-envs", "4", "--unroll-length", "5",

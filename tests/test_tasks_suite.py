@@ -13,6 +13,7 @@ import tasks
 from discosyn_jax import hand, scene, scripted
 from discosyn_jax.physics.native import _INTEGRATION
 from tasks import dice, weight_pull
+from tests import helpers
 from tests.helpers import run_episode, uniform_policy
 
 NEW = ("dice", "weight_pull", "screw", "valve_cylinder", "valve_cw", "screw_topdown", "valve_goal")
@@ -50,7 +51,7 @@ def _scripted_trajectory(env, name, steps, valve_angle=None):
 
 @pytest.mark.parametrize("name", NEW)
 def test_jitted_reset_and_step_are_finite_and_shaped(name):
-  env = tasks.make(name, backend="native")
+  env = helpers.env(name)
   start, states = _scripted_trajectory(env, name, 3)
   assert start.obs.shape == (2, env.observation_size) == (2, OBS_SIZE[name])
   assert states.obs.shape == (3, 2, OBS_SIZE[name]) and states.reward.shape == (3, 2)
@@ -63,18 +64,34 @@ def test_jitted_reset_and_step_are_finite_and_shaped(name):
 def test_valve_variants_share_valve3s_physics(name):
   """So MJX runs them as it runs valve3 (tests/test_backends.py); only their task functions
   differ, and those are the same JAX code on both backends."""
-  ours, valve3 = tasks.make(name, backend="native").mj_model, tasks.make("valve3", backend="native").mj_model
+  ours, valve3 = helpers.env(name).mj_model, helpers.env("valve3").mj_model
   for field in ("qpos0", "body_pos", "geom_size", "dof_damping", "dof_frictionloss", "jnt_range"):
     np.testing.assert_array_equal(getattr(ours, field), getattr(valve3, field))
 
 
 @pytest.mark.parametrize("name", ["valve_cw", "valve_goal"])
-def test_valve_variants_step_on_mjx(name):
-  """Their own task functions (direction, goal) jitted with MJX physics: finite and shaped."""
-  env = tasks.make(name, backend="mjx")
-  start, states = _scripted_trajectory(env, name, 3)
-  assert states.obs.shape == (3, 2, OBS_SIZE[name]) and states.reward.shape == (3, 2)
-  for leaf in jax.tree.leaves((start.obs, states.obs, states.reward, states.metrics)):
+def test_valve_variants_task_functions_run_on_mjx_states(name, valve3_on_both_backends):
+  """MJX steps their physics as it steps valve3's (the test above; tests/test_backends.py);
+  their own task functions (direction, goal), jitted on the states of valve3's MJX
+  trajectory: finite and shaped."""
+  env = helpers.env(name)
+  info = jax.jit(env.reset)(jax.random.PRNGKey(3)).info
+  mjx_env, states = valve3_on_both_backends["mjx"]
+  views = jax.vmap(mjx_env.physics.view)(states.pipeline_state)
+
+  @jax.jit
+  def task_values(views):
+    prev = jax.tree.map(lambda x: x[:-1], views)
+    now = jax.tree.map(lambda x: x[1:], views)
+    obs = jax.vmap(lambda v: env.task.observation(v, info))(views)
+    terms = jax.vmap(lambda p, v: env.task.reward_terms(p, v, info))(prev, now)
+    success = jax.vmap(lambda v: env.task.success(v, info))(views)
+    return obs, terms, success
+
+  obs, terms, success = task_values(views)
+  assert obs.shape == (50, OBS_SIZE[name]) and success.shape == (50,)
+  assert terms and all(v.shape == (49,) for v in terms.values())
+  for leaf in jax.tree.leaves((obs, terms, success)):
     assert np.isfinite(np.asarray(leaf)).all()
 
 
@@ -85,8 +102,9 @@ AGREE = {"dice": (25, 0.03), "weight_pull": (60, 0.005), "screw": (25, 0.1),
 
 @pytest.mark.parametrize("name", sorted(AGREE))
 def test_native_and_mjx_agree(name):
-  """One env, reset and the task's scripted motion, jitted on each backend (the MJX compile
-  dominates: 30-55 s per task on 2 cores, so one trajectory per distinct physics).
+  """One env, reset on the native backend, then the task's scripted motion jitted on each
+  backend, MJX starting from the same state (helpers.on_mjx; the MJX compile dominates:
+  one trajectory per distinct physics, and no MJX reset, which tests/test_backends.py runs).
 
   Tolerances: hand joints 0.02 rad as for valve3 (tests/test_backends.py: float32 MJX vs
   float64 C, different contact code). Objects: the dice's position and quaternion
@@ -95,26 +113,24 @@ def test_native_and_mjx_agree(name):
   stick and slip), the wheel valve's angle 0.05 rad as valve3's.
   """
   steps, atol = AGREE[name]
+  native = helpers.env(name)
+  start = jax.jit(native.reset)(jax.random.PRNGKey(5))
+  actions = jnp.asarray(scripted.for_task(name, steps, native.dt))
+  mjx_env = helpers.env(name, "mjx")
   out = {}
-  for backend in ("native", "mjx"):
-    env = tasks.make(name, backend=backend)
-    actions = jnp.asarray(scripted.for_task(name, steps, env.dt))
-
-    def roll(key, env=env, actions=actions):
-      state = env.reset(key)
-      return jax.lax.scan(lambda s, a: (env.step(s, a),) * 2, state, actions)[1]
-
-    states = jax.jit(roll)(jax.random.PRNGKey(5))
+  for env, state in ((native, start), (mjx_env, helpers.on_mjx(native, mjx_env, start))):
+    step = lambda s, a, env=env: (env.step(s, a),) * 2
+    states = jax.jit(lambda s, a: jax.lax.scan(step, s, a)[1])(state, actions)
     assert float(np.asarray(states.metrics["diverged"]).sum()) == 0
     assert np.isfinite(np.asarray(states.obs)).all() and states.obs.shape == (steps, OBS_SIZE[name])
-    out[backend] = np.asarray(jax.vmap(env.physics.view)(states.pipeline_state).qpos)
-  native, mjx = out["native"], out["mjx"]
-  hand_q = hand.qpos_indices(env.mj_model)
-  np.testing.assert_allclose(mjx[:, hand_q], native[:, hand_q], atol=0.02)
+    out[env.backend] = np.asarray(jax.vmap(env.physics.view)(states.pipeline_state).qpos)
+  native_q, mjx_q = out["native"], out["mjx"]
+  hand_q = hand.qpos_indices(native.mj_model)
+  np.testing.assert_allclose(mjx_q[:, hand_q], native_q[:, hand_q], atol=0.02)
   obj = OBJECT_QPOS.get(name, slice(24, 25))
-  np.testing.assert_allclose(mjx[:, obj], native[:, obj], atol=atol)
+  np.testing.assert_allclose(mjx_q[:, obj], native_q[:, obj], atol=atol)
   if name == "weight_pull":
-    assert native[-1, 24] > 0.01  # the hooked weight did rise
+    assert native_q[-1, 24] > 0.01  # the hooked weight did rise
 
 
 @pytest.fixture(scope="module")
@@ -122,7 +138,7 @@ def random_rollouts():
   """32 episodes of a uniform random policy per task (native)."""
   out = {}
   for name in NEW:
-    env = tasks.make(name, backend="native")
+    env = helpers.env(name)
     out[name] = (env, run_episode(env, jax.random.split(jax.random.PRNGKey(2), 32), uniform_policy)[1])
   return out
 
@@ -140,7 +156,7 @@ def test_random_policy_rarely_succeeds(random_rollouts, name):
 
 @pytest.mark.parametrize("name", ["weight_pull", "screw", "screw_topdown", "valve_cylinder", "valve_cw"])
 def test_a_deliberate_motion_succeeds(name):
-  env = tasks.make(name, backend="native")
+  env = helpers.env(name)
   # valve_cw from an angle where an arm lies under the sweeping fingers (the mirror of
   # test_valves.py's 0.5 rad); from random angles its sweep succeeds in 23 % of episodes
   angle = -0.5 if name == "valve_cw" else None
@@ -181,8 +197,8 @@ def test_rope_holds_together(random_rollouts):
 
 # -- rewards move the right way when the state is set directly -------------------------------
 
-def _start(name, **overrides):
-  env = tasks.make(name, backend="native", **overrides)
+def _start(name):
+  env = helpers.env(name)
   state = env.reset(jax.random.PRNGKey(0))
   return env, env.physics.view(state.pipeline_state), state.info
 
@@ -238,7 +254,7 @@ def test_dice_reward_grows_as_it_nears_the_goal_and_dropping_ends_it():
 
 
 def test_dice_goals_are_random_and_never_start_solved():
-  env = tasks.make("dice", backend="native")
+  env = helpers.env("dice")
   states = jax.vmap(env.reset)(jax.random.split(jax.random.PRNGKey(0), 64))
   goals = np.asarray(states.info["goal"])
   np.testing.assert_allclose(np.linalg.norm(goals, axis=1), 1.0, atol=1e-5)
@@ -249,7 +265,7 @@ def test_dice_goals_are_random_and_never_start_solved():
 
 
 def test_dice_rests_on_the_upturned_palm():
-  env = tasks.make("dice", backend="native")
+  env = helpers.env("dice")
   data = mujoco.MjData(env.mj_model)
   mujoco.mj_forward(env.mj_model, data)
   palm = data.site("palm_center")

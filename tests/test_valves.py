@@ -8,23 +8,39 @@ import pytest
 import tasks
 from discosyn_jax import hand, scripted
 from discosyn_jax.physics.native import deepest_penetration
+from tests import helpers
 from tests.helpers import run_episode, uniform_policy
 
 SET1 = tasks.TASK_SETS["set1"]
 
 
-@pytest.mark.parametrize("backend", ["native", "mjx"])
-@pytest.mark.parametrize("name", SET1)
-def test_jitted_reset_and_step(name, backend):
-  env = tasks.make(name, backend=backend)
-  keys = jax.random.split(jax.random.PRNGKey(0), 2)
-  _, states = run_episode(env, keys, uniform_policy, steps=3)
-  assert states.obs.shape == (3, 2, env.observation_size) == (3, 2, 27)
-  assert states.reward.shape == states.done.shape == (3, 2)
+def _check_steps(states, steps, batch):
+  assert states.obs.shape == (steps, batch, 27)
+  assert states.reward.shape == states.done.shape == (steps, batch)
   for leaf in jax.tree.leaves((states.obs, states.reward, states.metrics)):
     assert np.isfinite(np.asarray(leaf)).all()
   assert set(states.metrics) == {"reward/turn", "reward/bias", "success", "diverged"}
   assert not np.asarray(states.done).any()
+
+
+@pytest.mark.parametrize("name", SET1)
+def test_jitted_reset_and_step(name):
+  env = helpers.env(name)
+  _, states = run_episode(env, jax.random.split(jax.random.PRNGKey(0), 2), uniform_policy, steps=3)
+  _check_steps(states, 3, 2)
+
+
+@pytest.mark.parametrize("name", SET1[:3])
+def test_jitted_steps_on_mjx(name):
+  """Two envs started from the native reset, three random steps on MJX, jitted and vmapped.
+  valve3's MJX reset and steps: tests/test_backends.py."""
+  native, mjx = helpers.env(name), helpers.env(name, "mjx")
+  start = helpers.on_mjx(native, mjx, jax.jit(jax.vmap(native.reset))(
+      jax.random.split(jax.random.PRNGKey(0), 2)))
+  actions = jax.random.uniform(jax.random.PRNGKey(1), (3, 2, 20), minval=-1, maxval=1)
+  step = jax.vmap(mjx.step)
+  states = jax.jit(lambda s, a: jax.lax.scan(lambda s, a: (step(s, a),) * 2, s, a)[1])(start, actions)
+  _check_steps(states, 3, 2)
 
 
 @pytest.fixture(scope="module")
@@ -32,7 +48,7 @@ def random_rollouts():
   """32 episodes of a uniform random policy on each valve (native backend)."""
   out = {}
   for name in SET1:
-    env = tasks.make(name, backend="native")
+    env = helpers.env(name)
     out[name] = (env, *run_episode(env, jax.random.split(jax.random.PRNGKey(1), 32), uniform_policy))
   return out
 
@@ -94,7 +110,7 @@ def test_valve_turns_when_pushed_and_reward_follows_the_turn(direction):
 
 
 def test_reward_is_capped_and_success_needs_the_threshold():
-  env = tasks.make("valve3", backend="native")
+  env = helpers.env("valve3")
   task, view = env.task, None
   state = env.reset(jax.random.PRNGKey(0))
   view = env.physics.view(state.pipeline_state)
@@ -108,7 +124,7 @@ def test_reward_is_capped_and_success_needs_the_threshold():
 
 
 def test_initial_states_are_random():
-  env = tasks.make("valve3", backend="native")
+  env = helpers.env("valve3")
   states = jax.vmap(env.reset)(jax.random.split(jax.random.PRNGKey(0), 4))
   assert len(np.unique(np.asarray(states.info["start_angle"]))) == 4
   assert np.ptp(np.asarray(states.obs[:, :24]), axis=0).max() > 0
