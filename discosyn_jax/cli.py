@@ -204,7 +204,7 @@ def cmd_experiment(args) -> None:
   from experiments import paper
 
   out = pathlib.Path(args.out)
-  seeds = tuple(args.seeds) if args.seeds else paper.SCALES[args.scale].seeds
+  seeds = tuple(args.seeds) if args.seeds else getattr(paper.SCALES.get(args.scale), "seeds", (0,))
   print(f"experiment {args.name} at scale {args.scale}, seeds {' '.join(map(str, seeds))}, "
         f"in {out}")
   start = time.perf_counter()
