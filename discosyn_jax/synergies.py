@@ -31,6 +31,12 @@ from discosyn_jax import networks
 
 ARCHITECTURE = ("decoder", "n_synergies", "decoder_bias", "decoder_hidden", "squash_z")
 _DEFAULTS = {"squash_z": False}  # fields added since the first synergy files were written
+
+
+def architecture(fields: dict[str, Any]) -> dict[str, Any]:
+  """The ARCHITECTURE fields of a meta or a dict of config fields, defaults filled in."""
+  fields = {**_DEFAULTS, **fields}
+  return {k: fields[k] for k in ARCHITECTURE}
 _RUN_DECODER = "params.params.synergy_decoder."
 
 
@@ -133,7 +139,7 @@ def decode(fields: dict[str, Any], params: dict, z: np.ndarray) -> np.ndarray:
   """The decoder's mean at z, for a decoder described by `fields` (ARCHITECTURE)."""
   from discosyn_jax.config import TrainConfig
 
-  config = TrainConfig(**{k: {**_DEFAULTS, **fields}[k] for k in ARCHITECTURE})
+  config = TrainConfig(**architecture(fields))
   action_size = int(np.shape(params["log_std"])[-1])
   model = networks.build(config, obs_sizes=(1,), action_size=action_size)
   return np.asarray(model.apply({"params": {"synergy_decoder": params}}, jnp.asarray(z),
@@ -153,8 +159,7 @@ def save(path: pathlib.Path, params: dict, fields: dict[str, Any], **meta) -> pa
   path.parent.mkdir(parents=True, exist_ok=True)
   flat = {".".join(str(getattr(k, "key", k)) for k in keys): np.asarray(leaf)
           for keys, leaf in jax.tree_util.tree_flatten_with_path(params)[0]}
-  fields = {**_DEFAULTS, **fields}
-  info = {**{k: fields[k] for k in ARCHITECTURE}, **meta}
+  info = {**architecture(fields), **meta}
   fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz")
   with os.fdopen(fd, "wb") as f:
     np.savez(f, meta=np.array(json.dumps(info)), **flat)
@@ -226,7 +231,6 @@ def frozen_fields(meta: dict[str, Any], path) -> dict[str, Any]:
   `read` gives it): the decoder's architecture, frozen, no discriminator bonus and no
   decoder entropy (constants here). Fitted PCA / autoencoder spaces act with their mean
   (no noise outside the space); a DiscoSyn decoder keeps the noise it learned."""
-  fields = {k: meta[k] for k in ARCHITECTURE}
-  return dict(fields, decoder_from=str(pathlib.Path(path).resolve()), freeze_decoder=True,
-              decoder_noise="method" not in meta, alpha2=0.0, alpha3=0.0)
+  return dict(architecture(meta), decoder_from=str(pathlib.Path(path).resolve()),
+              freeze_decoder=True, decoder_noise="method" not in meta, alpha2=0.0, alpha3=0.0)
 

@@ -19,6 +19,10 @@ import sys
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+import discosyn_jax  # noqa: E402
+
+discosyn_jax.setup_jax()  # the compile cache; MJX imported quietly
+
 from discosyn_jax import config as config_lib  # noqa: E402
 from discosyn_jax import logs, loop  # noqa: E402
 from experiments import presets  # noqa: E402

@@ -33,6 +33,10 @@ import time
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
+import discosyn_jax  # noqa: E402
+
+discosyn_jax.setup_jax()  # the compile cache; MJX imported quietly
+
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
