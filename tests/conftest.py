@@ -1,4 +1,3 @@
-import atexit
 import os
 import shutil
 import tempfile
@@ -6,11 +5,11 @@ from importlib import metadata
 
 # Nothing the tests do is left behind: the JAX compile cache, matplotlib's font cache,
 # Jupyter's kernel files (the notebook test) and anything else written under the home
-# folder go to a temporary one, removed at exit; MuJoCo's MUJOCO_LOG.TXT (written to the
-# working directory on a simulation warning) goes to a temporary working directory
-# (`_temporary_working_directory` below). Set before anything imports jax or matplotlib.
+# folder go to a temporary one, removed when the session ends; MuJoCo's MUJOCO_LOG.TXT
+# (written to the working directory on a simulation warning) goes to a temporary working
+# directory (`_temporary_working_directory` below). Set before anything imports jax or
+# matplotlib.
 _SCRATCH = tempfile.mkdtemp(prefix="discosyn-tests-")
-atexit.register(shutil.rmtree, _SCRATCH, ignore_errors=True)
 os.environ["HOME"] = os.path.join(_SCRATCH, "home")
 os.environ["DISCOSYN_JAX_CACHE"] = os.path.join(_SCRATCH, "jax-cache")
 # Keep the native backend to one thread per test process on the 2-core CI machine.
@@ -33,6 +32,12 @@ import discosyn_jax  # noqa: E402  (sets XLA flags before anything imports jax)
 import pytest  # noqa: E402
 
 discosyn_jax.setup_jax()
+
+
+def pytest_unconfigure(config):
+  # at the session's end, not at exit: with an atexit handler the folder was sometimes left
+  # behind (JAX's exit handler can end the process with os._exit before it runs)
+  shutil.rmtree(_SCRATCH, ignore_errors=True)
 
 
 @pytest.fixture(autouse=True, scope="session")
