@@ -18,13 +18,19 @@ import shutil
 import sys
 import types
 
-import jax
-import jax.numpy as jnp
-from flax import struct
+import discosyn_jax
 
-from discosyn_jax import checkpoints
-from discosyn_jax.config import TrainConfig
-from tests.toy_env import ReachAction
+# before brax imports MJX: MJX prints "Failed to import warp" on stdout, which the test
+# reads line by line ("ready", then each saved step)
+discosyn_jax.setup_jax()
+
+import jax  # noqa: E402
+import jax.numpy as jnp  # noqa: E402
+from flax import struct  # noqa: E402
+
+from discosyn_jax import checkpoints  # noqa: E402
+from discosyn_jax.config import TrainConfig  # noqa: E402
+from tests.toy_env import ReachAction  # noqa: E402
 
 TOY = TrainConfig(tasks=("valve1",), n_synergies=2, policy_hidden=(8,), value_hidden=(8,),
                   discriminator_hidden=(8,), num_envs=4, unroll_length=5, num_minibatches=2,
