@@ -75,6 +75,7 @@ class Trainer:
     self._train = [wrappers.for_training(env) for env in self.envs]
     self._eval = [wrappers.for_evaluation(env) for env in self.envs]
     self._fresh_state = jax.jit(self._initial_state)
+    self._fresh_params = jax.jit(self._init_params)
     # the decoder's movement from a reference (diagnostics.py); None without a decoder
     self.decoder_drift = (jax.jit(functools.partial(diagnostics.decoder_drift, self.model))
                           if self.model.has_discriminator else None)
@@ -95,14 +96,19 @@ class Trainer:
   def initial_params(self, seed: int | None = None, decoder_params=None):
     """The parameters `init(seed, decoder_params)` starts from, without building envs."""
     key = jax.random.PRNGKey(self.config.seed if seed is None else seed)
-    params = jax.jit(self._init_params)(jax.random.split(key, 2 + len(self.envs))[1])
+    params = self._fresh_params(self._split(key)[1])
     return params if decoder_params is None else _with_decoder(params, decoder_params)
+
+  def _split(self, key):
+    """(the state's rng, the parameters' key, a reset key per task): what `init` draws."""
+    key, init_key, *env_keys = jax.random.split(key, 2 + len(self.envs))
+    return key, init_key, env_keys
 
   def _init_params(self, key):
     return self.model.init(key, [jnp.zeros((1, s)) for s in self.obs_sizes])
 
   def _initial_state(self, key, decoder_params) -> TrainState:
-    key, init_key, *env_keys = jax.random.split(key, 2 + len(self.envs))
+    key, init_key, env_keys = self._split(key)
     params = self._init_params(init_key)
     if decoder_params is not None:
       params = _with_decoder(params, decoder_params)
