@@ -32,7 +32,7 @@ REGISTRY: dict[str, Entry] = {
                     "turn a three-armed valve counter-clockwise"),
     # task set #2 (with valve3)
     "dice": Entry(dice.Dice, dice.default_config,
-                  "palm up: turn a free cube to a random goal orientation"),
+                  "palm up: turn a free cube about the palm normal to a goal angle"),
     "weight_pull": Entry(weight_pull.WeightPull, weight_pull.default_config,
                          "lift a weight by pulling up the rope tied to it"),
     "screw": Entry(screw.Screw, screw.default_config,
@@ -45,6 +45,11 @@ REGISTRY: dict[str, Entry] = {
                       "turn the three-armed valve clockwise"),
     "screw_topdown": Entry(screw.Screw, lambda **kw: screw.default_config(topdown=True, **kw),
                            "drive an upright screwdriver in, clockwise from above"),
+    # the dice as first specified: any axis, within 0.1 rad, no shaping (solved by no method)
+    "dice_full": Entry(dice.Dice, lambda **kw: dice.default_config(
+                           goal_axis="any", goal_min_angle=0.4, success_angle=0.1,
+                           progress_scale=0.0, success_bonus=0.0, **kw),
+                       "palm up: turn a free cube to a random orientation (any axis, 0.1 rad)"),
     # the sparse goal valve, and its dense twin for debugging
     "valve_goal": Entry(valve_goal.GoalValve, valve_goal.default_config,
                         "turn the three-armed valve to a goal angle; reward 1 near it, else 0"),

@@ -1,6 +1,8 @@
+import collections
 import os
 import shutil
 import tempfile
+import time
 from importlib import metadata
 
 # Nothing the tests do is left behind: the JAX compile cache, matplotlib's font cache,
@@ -32,6 +34,46 @@ import discosyn_jax  # noqa: E402  (sets XLA flags before anything imports jax)
 import pytest  # noqa: E402
 
 discosyn_jax.setup_jax()
+
+
+class _FileProgress:
+  """Under xdist pytest prints a dot per test and no file names: on the controller, this
+  prints a line as each test file finishes (files run whole on one worker: --dist loadfile)."""
+
+  def __init__(self, reporter):
+    self.reporter = reporter
+    self.total: collections.Counter | None = None
+    self.done: collections.Counter = collections.Counter()
+    self.outcomes: dict[str, collections.Counter] = collections.defaultdict(collections.Counter)
+    self.started: dict[str, float] = {}
+
+  def pytest_xdist_node_collection_finished(self, node, ids):
+    if self.total is None:  # every worker collects the same tests
+      self.total = collections.Counter(nodeid.split("::")[0] for nodeid in ids)
+
+  def pytest_runtest_logstart(self, nodeid, location):
+    self.started.setdefault(nodeid.split("::")[0], time.monotonic())
+
+  def pytest_runtest_logreport(self, report):
+    path = report.nodeid.split("::")[0]
+    if report.when == "call" or report.outcome != "passed":
+      self.outcomes[path][report.outcome] += 1
+    if report.when == "teardown" and self.total:
+      self.done[path] += 1
+      if self.done[path] == self.total[path]:
+        if getattr(self.reporter._tw, "width_of_current_line", 0):  # after xdist's dots
+          self.reporter.write("\n")
+        counts = ", ".join(f"{n} {outcome}" for outcome, n in sorted(self.outcomes[path].items()))
+        self.reporter.write_line(
+            f"{path}: {counts} in {time.monotonic() - self.started[path]:.0f} s")
+
+
+@pytest.hookimpl(trylast=True)  # after the terminal reporter is registered
+def pytest_configure(config):
+  if getattr(config.option, "numprocesses", None) and not hasattr(config, "workerinput"):
+    reporter = config.pluginmanager.get_plugin("terminalreporter")
+    if reporter is not None:
+      config.pluginmanager.register(_FileProgress(reporter), "discosyn-file-progress")
 
 
 def pytest_unconfigure(config):

@@ -1,4 +1,5 @@
-"""The two physics backends: native equals plain mj_step; native and MJX agree."""
+"""The two physics backends: native equals plain mj_step; native and MJX agree; the GPU
+path's training on the CPU (MJX under `Trainer.init` and one train step)."""
 
 import jax
 import jax.numpy as jnp
@@ -7,6 +8,8 @@ import numpy as np
 import pytest
 
 from discosyn_jax import hand, physics
+from discosyn_jax.config import TrainConfig
+from discosyn_jax.train import Trainer
 from tests import helpers
 
 
@@ -81,3 +84,22 @@ def test_the_mjx_implementation_is_chosen_by_name_and_checked(monkeypatch):
     monkeypatch.setenv("DISCOSYN_MJX_IMPL", "warp")
     with pytest.raises(ValueError, match="needs mujoco_warp"):
       mjx_backend.default_impl()
+
+
+def test_mjx_trainer_inits_and_trains_one_step():
+  # `init` once ran MJX op by op (minutes per reset); it must be one jitted function, so this
+  # test, at 2 envs, takes about as long as compiling the step
+  config = TrainConfig(tasks=("valve0",), n_synergies=3, decoder="linear", num_envs=2,
+                       unroll_length=2, num_minibatches=1, update_epochs=1, steps=1,
+                       eval_every=0, eval_envs=2, checkpoint_every=0, backend="mjx")
+  trainer = Trainer(config)
+  assert trainer.envs[0].backend == "mjx"
+  state = trainer.init()
+  assert trainer._fresh_state._cache_size() == 1  # built by one compiled function
+  assert state.env_states[0].obs.shape == (2, trainer.obs_sizes[0])
+  before = jax.tree.map(np.asarray, state.params)
+  state, metrics = trainer.train_step(state)
+  assert int(state.step) == 1 and bool(metrics["finite"])
+  moved = jax.tree.leaves(jax.tree.map(lambda a, b: np.abs(np.asarray(a) - b).max(),
+                                       state.params, before))
+  assert max(moved) > 0

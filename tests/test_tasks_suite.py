@@ -29,7 +29,7 @@ def test_task_sets():
   assert tasks.TASK_SETS["unseen"] == ("valve_cylinder", "valve_cw", "screw_topdown")
   assert tasks.TASK_SETS["sparse"] == ("valve_goal",)
   assert tasks.sets_of("valve3") == ["set1", "set2"]
-  assert set(NEW) | {"valve_goal_dense"} | set(tasks.TASK_SETS["set1"]) == set(tasks.REGISTRY)
+  assert set(NEW) | {"valve_goal_dense", "dice_full"} | set(tasks.TASK_SETS["set1"]) == set(tasks.REGISTRY)
 
 
 def _scripted_trajectory(env, name, steps, valve_angle=None):
@@ -236,15 +236,21 @@ def _quat(axis, angle):
 def test_dice_reward_grows_as_it_nears_the_goal_and_dropping_ends_it():
   env, view, info = _start("dice")
   task = env.task
-  info = {**info, "goal": _quat([0, 1, 1], 1.2)}
+  info = {**info, "goal": _quat([0, 0, 1], -1.2)}
   q = task.dice_qpos
-  at = lambda angle: view.replace(qpos=view.qpos.at[q + 3:q + 7].set(_quat([0, 1, 1], angle)))
-  rewards = [_reward(env, view, at(a), info) for a in (0.0, 0.4, 0.8, 1.15, 1.2)]
-  assert rewards == sorted(rewards) and rewards[-1] == pytest.approx(1.0, abs=1e-3)
-  assert float(task.error(at(1.05), info)) == pytest.approx(0.15, abs=1e-3)
-  assert float(task.success(at(1.05), info)) == 0 and float(task.success(at(1.15), info)) == 1
-  assert float(task.terminated(at(1.2), info)) == 0
-  dropped = at(1.2).replace(qpos=at(1.2).qpos.at[q + 2].set(dice.PALM_SURFACE_Z - 0.11))
+  at = lambda angle: view.replace(qpos=view.qpos.at[q + 3:q + 7].set(_quat([0, 0, 1], angle)))
+  # held still at each angle: the orientation term, plus the bonus within 0.2 rad
+  still = [_reward(env, at(a), at(a), info) for a in (0.0, -0.4, -0.8, -1.05, -1.15, -1.2)]
+  assert still == sorted(still)
+  assert still[-1] == pytest.approx(1.0 + 1.0, abs=1e-3) and still[2] == pytest.approx(1 - 0.4 / math.pi, abs=1e-3)
+  assert float(task.error(at(-1.05), info)) == pytest.approx(0.15, abs=1e-3)
+  assert float(task.success(at(-0.95), info)) == 0 and float(task.success(at(-1.05), info)) == 1
+  # a step towards the goal earns 10 per rad of error it removes; one away costs as much
+  terms = task.reward_terms(at(-0.5), at(-0.6), info)
+  assert float(terms["progress"]) == pytest.approx(1.0, abs=1e-3)
+  assert float(task.reward_terms(at(-0.6), at(-0.5), info)["progress"]) == pytest.approx(-1.0, abs=1e-3)
+  assert float(task.terminated(at(-1.2), info)) == 0
+  dropped = at(-1.2).replace(qpos=at(-1.2).qpos.at[q + 2].set(dice.PALM_SURFACE_Z - 0.11))
   assert float(task.terminated(dropped, info)) == 1 and float(task.success(dropped, info)) == 0
   # the env ends the episode on it
   state = env.reset(jax.random.PRNGKey(0))
@@ -253,14 +259,32 @@ def test_dice_reward_grows_as_it_nears_the_goal_and_dropping_ends_it():
   assert float(env.step(state, jnp.zeros(20)).done) == 1
 
 
-def test_dice_goals_are_random_and_never_start_solved():
-  env = helpers.env("dice")
+def test_dice_full_is_the_first_spec_any_axis_within_a_tenth_of_a_radian():
+  env, view, info = _start("dice_full")
+  task = env.task
+  info = {**info, "goal": _quat([0, 1, 1], 1.2)}
+  q = task.dice_qpos
+  at = lambda angle: view.replace(qpos=view.qpos.at[q + 3:q + 7].set(_quat([0, 1, 1], angle)))
+  for before, after in ((0.0, 0.4), (0.8, 1.15), (1.2, 1.2)):  # 1 - e / pi, nothing else
+    error = float(task.error(at(after), info))
+    assert _reward(env, at(before), at(after), info) == pytest.approx(1 - error / math.pi, abs=1e-4)
+  assert float(task.success(at(1.05), info)) == 0 and float(task.success(at(1.15), info)) == 1
+
+
+@pytest.mark.parametrize("name,lo,axis", [("dice", 0.8, "z"), ("dice_full", 0.4, "any")])
+def test_dice_goals_are_random_and_never_start_solved(name, lo, axis):
+  env = helpers.env(name)
   states = jax.vmap(env.reset)(jax.random.split(jax.random.PRNGKey(0), 64))
   goals = np.asarray(states.info["goal"])
   np.testing.assert_allclose(np.linalg.norm(goals, axis=1), 1.0, atol=1e-5)
   angles = 2 * np.arccos(np.clip(np.abs(goals[:, 0]), 0, 1))
-  assert angles.min() >= 0.4 - 1e-4 and angles.max() <= math.pi / 2 + 1e-4
+  assert angles.min() >= lo - 1e-4 and angles.max() <= math.pi / 2 + 1e-4
   assert len(np.unique(goals.round(4), axis=0)) == 64
+  if axis == "z":  # about the palm normal, both ways round
+    np.testing.assert_allclose(goals[:, 1:3], 0.0, atol=1e-6)
+    assert (goals[:, 3] > 0).any() and (goals[:, 3] < 0).any()
+  else:
+    assert np.abs(goals[:, 1:3]).max(axis=1).min() > 1e-3
   assert not np.asarray(states.metrics["success"]).any()
 
 
@@ -316,6 +340,7 @@ def test_dense_goal_twin_grows_towards_the_goal():
 
 @pytest.mark.parametrize("name,bad", [
     ("dice", {"goal_min_angle": 2.0}), ("dice", {"success_angle": 0.0}),
+    ("dice", {"goal_axis": "x"}),
     ("weight_pull", {"success_lift": -0.01}), ("screw", {"pitch": 0.0}),
     ("screw", {"success_depth": 0.05}), ("valve_goal", {"threshold": 1.0}),
     ("valve_cylinder", {"shape": "square"}),
