@@ -131,9 +131,11 @@ def cmd_train(args) -> None:
   base = config_lib.load(saved) if args.resume and saved.is_file() else None
   config = train_config(args, base)
   devices.mesh_for(config, args.devices)  # a bad device count fails before the run directory
+  if args.stop_at is not None and not 0 <= args.stop_at <= 1:
+    raise ValueError(f"--stop-at is a success rate in [0, 1], not {args.stop_at}")
   print(f"run directory: {out}")
   done = loop.train(config, out, resume=args.resume, force=args.force,
-                    progress=not args.no_progress, devices=args.devices)
+                    progress=not args.no_progress, devices=args.devices, stop_at=args.stop_at)
   print(next_commands(out, done["state"].step, config, done["results"]))
 
 
@@ -276,6 +278,9 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("--decoder-from", help="learn in the frozen synergy space of a run folder or a "
                  "synergy file (.npz): its decoder, no discriminator bonus or decoder entropy "
                  "(default: none, the decoder is learned)")
+  p.add_argument("--stop-at", type=float, help="end the run at the first evaluation at which "
+                 "every task's deterministic success is at least this, 0-1 (default: run all "
+                 "--steps)")
   p.add_argument("--out", help="run directory (default: runs/<preset>-seed<seed>)")
   p.add_argument("--resume", action="store_true", help="continue the run in --out")
   p.add_argument("--force", action="store_true", help="replace the run in --out")

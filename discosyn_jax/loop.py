@@ -212,9 +212,11 @@ def format_table(results: dict[str, dict[str, float]], step: int, config: TrainC
 
 def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, force: bool = False,
           progress: bool = True, trainer: Trainer | None = None, log=print,
-          devices=None) -> dict[str, Any]:
+          devices=None, stop_at: float | None = None) -> dict[str, Any]:
   """Run (or continue) a training run in `run_dir`; return the final evaluation.
   `devices`: the count to split the env batch over (default: all; see devices.py).
+  `stop_at`: end the run (final checkpoint and all) at the first evaluation at which every
+  task's deterministic success is at least this.
 
   Everything that can refuse the run (the config, the folder, the envs, the memory they
   need) is checked before the run directory is made. Continuing a run restores its newest
@@ -244,6 +246,7 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, f
   bar = _progress(progress, start_step, config.steps)
   shown = {}  # training success per task, as of the last rollout in which episodes ended
   step = start_step
+  results, evaluated_at = None, None  # the newest evaluation, and its step
   try:
     history = _cut_logs(run_dir, start_step) if resume else None
     with open(run_dir / logs.METRICS_FILE, "a") as metrics_file, \
@@ -277,14 +280,20 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, f
                               refresh=False)
           bar.update(1)
         if _evaluates_at(config, step):
-          _log_eval((eval_file, board), evaluate(trainer, state), step, config, now - start)
+          results, evaluated_at = evaluate(trainer, state), step
+          _log_eval((eval_file, board), results, step, config, now - start)
+          if stop_at is not None and all(r["success"] >= stop_at for r in results.values()):
+            log(f"every task at >= {stop_at:.0%} deterministic success at step {step}: "
+                "the run ends here")
+            break
         if config.checkpoint_every and step % config.checkpoint_every == 0:
           last_good = checkpoints.save(run_dir, state, config.keep_checkpoints)
       if bar is not None:
         bar.close()
         bar = None
-      results = evaluate(trainer, state)
-      _log_eval((eval_file, board), results, step, config, time.perf_counter() - start)
+      if evaluated_at != step:
+        results = evaluate(trainer, state)
+        _log_eval((eval_file, board), results, step, config, time.perf_counter() - start)
     last_good = checkpoints.save(run_dir, state, config.keep_checkpoints, final=True)
     curves = plots.run_curves(run_dir, run_dir / plots.PLOTS_DIR)
   except OSError as err:  # a full disk, a folder made read-only, a checkpoint not written

@@ -177,7 +177,24 @@ def test_train_refuses_bad_input(tmp_path, capsys):
   _fails_with_one_line(["train", "--synergies", "21", "--out", out], capsys, "between 1 and 20")
   _fails_with_one_line(["train", "--preset", "nope", "--out", out], capsys, "unknown preset")
   _fails_with_one_line(["train", "--resume", "--out", out], capsys, "holds no run")
+  _fails_with_one_line(["train", "--stop-at", "80", "--out", out], capsys, "success rate in [0, 1]")
   assert not (tmp_path / "run").exists()
+
+
+def test_stop_at_ends_the_run_at_the_first_evaluation_that_reaches_it(tmp_path):
+  config = VALVE.replace(steps=6, eval_every=2, checkpoint_every=0)
+  logged = []
+  # success >= 0 holds at any evaluation: the run ends at the first, step 2, as a whole run
+  done = loop.train(config, tmp_path / "run", progress=False, log=logged.append, stop_at=0.0)
+  assert int(done["state"].step) == 2 and any("the run ends here" in line for line in logged)
+  evals = [json.loads(l) for l in (tmp_path / "run" / "eval.jsonl").read_text().splitlines()]
+  assert [row["step"] for row in evals] == [2]  # that evaluation is the final one, not redone
+  assert len((tmp_path / "run" / "metrics.jsonl").read_text().splitlines()) == 2
+  _, state = loop.load_trained(tmp_path / "run")
+  assert int(state.step) == 2
+  # a rate above any success never stops it
+  done = loop.train(config, tmp_path / "all", progress=False, log=logged.append, stop_at=1.01)
+  assert int(done["state"].step) == 6
 
 
 def test_a_run_is_never_silently_overwritten_or_misread(valve_run, tmp_path, capsys):
