@@ -205,7 +205,7 @@ def decoder_table(runs: list[Run], last: int = 10) -> str:
   """Is the synergy space learned? Per run with a decoder: its movement from the initial
   decoder at the end (diagnostics.py), the gradient norms of decoder and heads, and the
   discriminator's bonus beside the env's reward per step (means over the last `last` logged
-  train steps)."""
+  train steps). A frozen decoder's gradient is computed but never applied: marked so."""
   lines = ["| run | env steps | W change | principal cosines | decoder / heads grad norm "
            "| bonus / reward per step |", "|---|---|---|---|---|---|"]
   for run in sorted(runs, key=lambda r: (r.task_set, r.method, r.seed)):
@@ -219,9 +219,10 @@ def decoder_table(runs: list[Run], last: int = 10) -> str:
     tasks = run.config.tasks
     bonus = np.mean([mean(f"{t}/bonus") for t in tasks])
     reward = np.mean([mean(f"{t}/reward") for t in tasks])
+    frozen = " (frozen)" if run.config.freeze_decoder else ""
     lines.append(f"| {run.method} {run.task_set} seed {run.seed} | {end['env_steps']:,.0f} | "
-                 f"{end['decoder/change']:.1%} | {cosines} | {mean('grad_norm/decoder'):.3g} / "
-                 f"{mean('grad_norm/heads'):.3g} | {bonus:.3f} / {reward:.3f} |")
+                 f"{end['decoder/change']:.1%} | {cosines} | {mean('grad_norm/decoder'):.3g}"
+                 f"{frozen} / {mean('grad_norm/heads'):.3g} | {bonus:.3f} / {reward:.3f} |")
   return "\n".join(lines) + "\n" if len(lines) > 2 else ""
 
 

@@ -213,6 +213,11 @@ def test_report_lists_every_method_and_task(experiments, tmp_path):
   assert "| a | b | solved |" in table
   assert "| set1 | PCA |" in text and "| set1 | AE |" in text
   assert "DiscoSyn3-L frozen (seed 0) | g |" in text and "PPO (seed 0) | g |" in text
+  # the synergy-space table: a frozen decoder's gradient is marked as never applied
+  learned = text.split("## Is the synergy space learned?")[1].split("\n## ")[0].splitlines()
+  random = next(line for line in learned if line.startswith("| Random3-L "))  # sparse's control
+  source = next(line for line in learned if line.startswith("| DiscoSyn3-L set1 "))
+  assert "(frozen)" in random and "(frozen)" not in source
   for figure in ("curves-set1.png", "tsne-set1.png", "sparse.png", "sparse-return.png"):
     assert (tmp_path / "report" / figure).stat().st_size > 1000
     assert f"({figure})" in text
