@@ -83,8 +83,7 @@ def main(argv=None):
       config = base.replace(seed=seed, steps=args.steps, eval_every=args.eval_every,
                             checkpoint_every=args.eval_every, **VARIANTS[variant]).validate()
       run = out / f"{variant}-seed{seed}"
-      done = (run / "final").is_dir() and config_lib.load(run / loop.CONFIG_FILE) == config
-      if not done:
+      if not loop.finished(run, config):
         loop.train(config, run, resume=(run / loop.CONFIG_FILE).is_file(), progress=False)
   print(summary(out))
 

@@ -31,7 +31,6 @@ from typing import Any, Callable
 import jax
 import numpy as np
 
-from discosyn_jax import config as config_lib
 from discosyn_jax import loop, report, synergies
 from discosyn_jax.config import TrainConfig
 from experiments import presets
@@ -79,9 +78,7 @@ class Train:
   meta: dict[str, Any]
 
   def done(self, out: pathlib.Path) -> bool:
-    saved = out / self.name / loop.CONFIG_FILE
-    return ((out / self.name / "final").is_dir() and saved.is_file()
-            and config_lib.load(saved) == self.config)
+    return loop.finished(out / self.name, self.config)
 
   def run(self, out: pathlib.Path, make_trainer, progress: bool, log) -> None:
     run_dir = out / self.name

@@ -79,10 +79,9 @@ def main(argv=None):
     for seed in args.seeds:
       config = config_for(task, seed, args.eval_every)
       run = out / f"{task}-seed{seed}"
-      saved = run / loop.CONFIG_FILE
-      if (run / "final").is_dir() and config_lib.load(saved) == config:
-        continue
-      loop.train(config, run, resume=saved.is_file(), progress=False, stop_at=TARGET)
+      if not loop.finished(run, config):
+        loop.train(config, run, resume=(run / loop.CONFIG_FILE).is_file(), progress=False,
+                   stop_at=TARGET)
   print(summary(out))
 
 
