@@ -257,10 +257,13 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, f
   results, evaluated_at = None, None  # the newest evaluation, and its step
   try:
     history = _cut_logs(run_dir, start_step) if resume else None
+    # a resumed run's wall clock goes on from where its kept logs end, not from 0
+    start -= history[0][-1].get("wall_s", 0.0) if history and history[0] else 0.0
     with open(run_dir / logs.METRICS_FILE, "a") as metrics_file, \
          open(run_dir / logs.EVAL_FILE, "a") as eval_file, logs.TensorBoard(run_dir, history) as board:
       if resume and _evaluates_at(config, step):  # the evaluation the cut removed, redone
-        _log_eval((eval_file, board), evaluate(trainer, state), step, config, 0.0)
+        _log_eval((eval_file, board), evaluate(trainer, state), step, config,
+                  time.perf_counter() - start)
       tick = time.perf_counter()
       while int(state.step) < config.steps:
         state, metrics = train_step(state)

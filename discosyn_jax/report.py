@@ -146,6 +146,17 @@ def _cell(values: np.ndarray, threshold: float, paper: str | None) -> str:
   return f"{mark} {mean:.0%}{spread} [{values.size}]{paper_mark}"
 
 
+def _mean_over_tasks(group: list[Run], task_names) -> str:
+  """Each seed's success averaged over the set's tasks, then the mean (min-max) over seeds:
+  the figure issue 13's targets compare."""
+  per_seed = np.array([np.mean([r.final[f"{t}/success"] for t in task_names]) for r in group
+                       if all(f"{t}/success" in r.final for t in task_names)])
+  if per_seed.size == 0:
+    return "–"
+  spread = f" ({per_seed.min():.0%}–{per_seed.max():.0%})" if per_seed.size > 1 else ""
+  return f"{per_seed.mean():.0%}{spread}"
+
+
 def _order(methods) -> list[str]:
   known = [m for m in METHOD_ORDER if m in methods]
   return known + sorted(set(methods) - set(known))
@@ -159,8 +170,8 @@ def solved_tables(runs: list[Run], threshold: float) -> str:
     task_names = list(in_set[0].config.tasks)
     paper = PAPER_SOLVED.get(task_set, {})
     lines += [f"### {task_set}: tasks solved (success >= {threshold:.0%})", "",
-              "| method | " + " | ".join(task_names) + " | solved |",
-              "|---" * (len(task_names) + 2) + "|"]
+              "| method | " + " | ".join(task_names) + " | mean | solved |",
+              "|---" * (len(task_names) + 3) + "|"]
     for method in _order({r.method for r in in_set}):
       group = [r for r in in_set if r.method == method]
       cells, solved = [], 0
@@ -175,7 +186,7 @@ def solved_tables(runs: list[Run], threshold: float) -> str:
                      if method in paper and set(paper_tasks) == set(task_names) else "")
       unfinished = sum(not r.finished for r in group)
       note = f", {unfinished} unfinished" if unfinished else ""
-      lines.append(f"| {method} | " + " | ".join(cells) +
+      lines.append(f"| {method} | " + " | ".join(cells) + f" | {_mean_over_tasks(group, task_names)}"
                    f" | {solved}/{len(task_names)}{paper_count}{note} |")
     lines.append("")
   return "\n".join(lines)

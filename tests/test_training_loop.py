@@ -95,6 +95,10 @@ def test_resume_gives_the_same_state_as_an_unbroken_run(valve_run, tmp_path):
   assert straight["results"] == resumed["results"]
   lines = (broken / "metrics.jsonl").read_text().splitlines()
   assert [json.loads(l)["step"] for l in lines] == [1, 2, 3, 4]
+  # the wall clock goes on across the resume: it does not restart at 0
+  walls = [json.loads(l)["wall_s"] for l in lines]
+  evaluated = json.loads((broken / "eval.jsonl").read_text().splitlines()[-1])["wall_s"]
+  assert walls == sorted(walls) and walls[0] > 0 and evaluated >= walls[-1], (walls, evaluated)
 
 
 def test_checkpoint_restores_the_whole_state(valve_run):
