@@ -207,11 +207,12 @@ def cmd_experiment(args) -> None:
 
   out = pathlib.Path(args.out)
   seeds = tuple(args.seeds) if args.seeds else getattr(paper.SCALES.get(args.scale), "seeds", (0,))
-  print(f"experiment {args.name} at scale {args.scale}, seeds {' '.join(map(str, seeds))}, "
+  only = f", methods {' '.join(args.methods)}" if args.methods else ""
+  print(f"experiment {args.name} at scale {args.scale}, seeds {' '.join(map(str, seeds))}{only}, "
         f"in {out}")
   start = time.perf_counter()
   paper.run(args.name, out, args.scale, seeds, decoder_from=args.decoder_from,
-            progress=args.progress)
+            methods=args.methods, progress=args.progress)
   print(f"experiment {args.name} finished in {(time.perf_counter() - start) / 60:.1f} min")
 
 
@@ -336,6 +337,9 @@ def build_parser() -> argparse.ArgumentParser:
                  help="folder of the experiment's runs (default: %(default)s)")
   p.add_argument("--decoder-from", help="transfer / sparse: the frozen decoder of this run folder "
                  "or synergy file, instead of training their own DiscoSyn run first (default: none)")
+  p.add_argument("--methods", nargs="+", metavar="METHOD",
+                 help="only these methods' runs and the runs they need, e.g. DiscoSyn3-L "
+                 "Random3-L, or PCA4 (with its PPO run and fit); default: every method")
   p.add_argument("--progress", action="store_true", help="a progress bar per run")
   p.set_defaults(fn=cmd_experiment)
 

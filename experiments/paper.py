@@ -57,9 +57,10 @@ SCALES = {
     # seconds per run: the pipeline's plumbing, nothing learned
     "ci": Scale(dict(num_envs=4, unroll_length=5, num_minibatches=2, update_epochs=1, steps=2,
                      eval_every=1, eval_envs=2, checkpoint_every=0), 2, 50, (0,)),
-    # a 2-core CPU: 1.5 M env steps for a four-task run (~5 min alone); Table I at this scale
-    # (DiscoSyn, its random-decoder controls and the baselines: 13 runs x 3 seeds) takes
-    # about 3.5 hours
+    # a 2-core CPU: 1.5 M env steps for a four-task run of set #1, ~12 min with two runs side
+    # by side (2026-11-30); Table I at this scale (DiscoSyn, its random-decoder controls and
+    # the baselines: 13 runs x 3 seeds) takes about 4 hours, the sparse valve ~20 min more.
+    # A set #2 run (free cube, rope) takes about twice as long.
     "cpu": Scale(dict(num_envs=64, unroll_length=20, num_minibatches=4, update_epochs=4,
                       steps=300, eval_every=50, eval_envs=32, checkpoint_every=100), 32, 3000,
                  (0, 1, 2)),
@@ -76,6 +77,7 @@ class Train:
   name: str  # the run's folder in OUT
   config: TrainConfig
   meta: dict[str, Any]
+  needs: tuple[str, ...] = ()  # the steps whose folders this one reads
 
   def done(self, out: pathlib.Path) -> bool:
     return loop.finished(out / self.name, self.config)
@@ -97,6 +99,10 @@ class Fit:
   autoencoder_steps: int
   hidden: tuple[int, ...]
   meta: dict[str, Any]
+
+  @property
+  def needs(self) -> tuple[str, ...]:
+    return (self.source,)
 
   def done(self, out: pathlib.Path) -> bool:
     return (out / self.name / report.FIT_FILE).is_file()
@@ -194,7 +200,8 @@ class Planner:
                                        self.out / fit.name / f"{method.lower()}{k}.npz")
       config = self._config(ppo.config, self.sets[task_set], init_z_std=1.0, **frozen)
       steps.append(Train(self._folder(f"{method}{k}", task_set), config,
-                         _meta(experiment, f"{method}{k}", task_set, self.seed, self.scale)))
+                         _meta(experiment, f"{method}{k}", task_set, self.seed, self.scale),
+                         needs=(fit.name,)))
     return steps
 
   def frozen_synergies(self, task_set: str, experiment: str) -> list:
@@ -214,7 +221,8 @@ class Planner:
                            else self._folder(f"{experiment}-{what}", label))
     frozen = Train(folder("synergies"),
                    self._config(base, self.sets[task_set], **synergies.frozen_fields(meta, path)),
-                   _meta(experiment, f"{method} frozen", task_set, self.seed, self.scale))
+                   _meta(experiment, f"{method} frozen", task_set, self.seed, self.scale),
+                   needs=(source.name,) if source else ())
     scratch = self.ppo(task_set, experiment)
     scratch = dataclasses.replace(scratch, name=folder("ppo"))
     control = None
@@ -249,13 +257,29 @@ EXPERIMENTS = ("discosyn-set1", "discosyn-set2", "baselines-set1", "baselines-se
                "sparse", "all")
 
 
+def select(steps: list, methods) -> list:
+  """The steps of these methods (e.g. "DiscoSyn3-L", "PCA4", "DiscoSyn3-L frozen") and the
+  steps they read from (a PCA row's PPO run and fit, a frozen space's DiscoSyn run), in plan
+  order."""
+  by_name = {s.name: s for s in steps}
+  keep = {s.name for s in steps if s.meta["method"] in methods}
+  todo = list(keep)
+  while todo:
+    for need in by_name[todo.pop()].needs:
+      if need in by_name and need not in keep:
+        keep.add(need)
+        todo.append(need)
+  return [s for s in steps if s.name in keep]
+
+
 def run(experiment: str, out: pathlib.Path, scale: str, seeds=None, *,
         make_trainer: Callable[[TrainConfig], Any] | None = None, task_sets=None,
-        decoder_from=None, progress: bool = False, log=print) -> list[pathlib.Path]:
+        decoder_from=None, methods=None, progress: bool = False, log=print) -> list[pathlib.Path]:
   """Run (or continue) one experiment for every seed; the folders of its steps.
 
   `decoder_from` (a run folder or a synergy file) gives transfer and sparse a decoder
-  trained elsewhere instead of their own DiscoSyn run."""
+  trained elsewhere instead of their own DiscoSyn run. `methods`: only these methods' steps
+  and the steps they need (more seeds of some rows, say)."""
   if decoder_from and experiment not in ("transfer", "sparse"):
     raise ValueError(f"a decoder can be given to transfer and sparse only, not to {experiment}")
   if make_trainer is None:
@@ -264,6 +288,13 @@ def run(experiment: str, out: pathlib.Path, scale: str, seeds=None, *,
   if seeds is None:
     seeds = SCALES[scale].seeds if scale in SCALES else (0,)
   plans = [Planner(out, scale, seed, task_sets, decoder_from).plan(experiment) for seed in seeds]
+  if methods:
+    known = {s.meta["method"] for s in plans[0]} - {"fit"}
+    unknown = [m for m in methods if m not in known]
+    if unknown:
+      raise ValueError(f"{experiment} has no method {', '.join(map(repr, unknown))}; its methods: "
+                       f"{', '.join(sorted(known))}")
+    plans = [select(steps, methods) for steps in plans]
   folders = []
   for steps in plans:
     for step in steps:

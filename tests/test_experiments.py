@@ -291,11 +291,36 @@ def test_transfer_from_a_given_decoder(experiments, tmp_path):
     paper.run("discosyn-set1", tmp_path, "ci", decoder_from=tmp_path, task_sets=SETS)
 
 
+def test_methods_run_with_the_runs_they_need(tmp_path):
+  plan = lambda name: paper.Planner(tmp_path, "ci", 0, SETS).plan(name)
+  names = lambda steps: [s.name for s in steps]
+  assert names(paper.select(plan("baselines-set1"), ["PCA4"])) == [
+      "ppo-set1-seed0", "synergies-set1-seed0", "pca4-set1-seed0"]
+  assert names(paper.select(plan("discosyn-set1"), ["Random3-L", "DiscoSyn3-L"])) == [
+      "discosyn3-l-set1-seed0", "random3-l-set1-seed0"]
+  assert names(paper.select(plan("sparse"), ["DiscoSyn3-L frozen"])) == [
+      "discosyn3-l-set1-seed0", "sparse-synergies-seed0"]
+  assert names(paper.select(plan("sparse"), ["Random3-L", "PPO"])) == [
+      "sparse-random-seed0", "sparse-ppo-seed0"]
+  # a run of one method is the same run as the whole experiment's (the same folder, config)
+  whole = {s.name: s for s in plan("baselines-set1")}
+  logs = []
+  folders = paper.run("baselines-set1", tmp_path, "ci", methods=["PPO"], task_sets=SETS,
+                      make_trainer=make_trainer, log=logs.append)
+  assert folders == [tmp_path / "ppo-set1-seed0"] and whole["ppo-set1-seed0"].done(tmp_path)
+  assert sorted(p.name for p in tmp_path.iterdir()) == ["ppo-set1-seed0"]
+
+
 def test_cli_rejects_bad_input(tmp_path, capsys):
   assert cli.main(["experiment", "nope", "--out", str(tmp_path)]) == 2
   assert "unknown experiment 'nope'" in capsys.readouterr().err
   assert cli.main(["experiment", "sparse", "--scale", "huge", "--out", str(tmp_path)]) == 2
   assert "unknown scale 'huge'" in capsys.readouterr().err
+  assert cli.main(["experiment", "baselines-set1", "--methods", "PCA5", "--out",
+                   str(tmp_path / "x")]) == 2
+  assert "baselines-set1 has no method 'PCA5'; its methods: AE4, AE6, PCA4, PCA6, PPO" in \
+      capsys.readouterr().err
+  assert not (tmp_path / "x").exists()
   (tmp_path / "empty").mkdir()
   assert cli.main(["report", str(tmp_path / "empty"), "--out", str(tmp_path / "r")]) == 2
   assert "holds no run" in capsys.readouterr().err
