@@ -60,7 +60,7 @@ SCALES = {
     # a 2-core CPU: 1.5 M env steps for a four-task run of set #1, ~12 min with two runs side
     # by side (2026-11-30); Table I at this scale (DiscoSyn, its random-decoder controls and
     # the baselines: 13 runs x 3 seeds) takes about 4 hours, the sparse valve ~20 min more.
-    # A set #2 run (free cube, rope) takes about twice as long.
+    # A set #2 run (free cube, rope) takes ~1.25 times as long (888 s beside a 714 s set #1 run).
     "cpu": Scale(dict(num_envs=64, unroll_length=20, num_minibatches=4, update_epochs=4,
                       steps=300, eval_every=50, eval_envs=32, checkpoint_every=100), 32, 3000,
                  (0, 1, 2)),
