@@ -3,13 +3,12 @@
 import sys, pathlib, itertools, numpy as np
 sys.path.insert(0, "/work/main")
 from discosyn_jax import synergies
+from discosyn_jax.diagnostics import principal_cosines
 O = pathlib.Path(sys.argv[1]); seeds = [int(s) for s in sys.argv[2:]]
 def basis(path):
     meta, p = synergies.read(path)
     return np.asarray(p["synergies"]["kernel"]).T  # (20, k)
-def cos(a, b):
-    qa, _ = np.linalg.qr(a); qb, _ = np.linalg.qr(b)
-    return np.clip(np.linalg.svd(qa.T @ qb, compute_uv=False), 0, 1)
+cos = lambda a, b: np.asarray(principal_cosines(a, b))
 fmt = lambda c: " / ".join(f"{x:.2f}" for x in c)
 W = {}
 for s in seeds:
