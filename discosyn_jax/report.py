@@ -111,8 +111,9 @@ def load_run(path: pathlib.Path) -> Run:
              finished=(path / "final").is_dir(), scale=meta.get("scale"))
 
 
-def find(paths) -> tuple[list[Run], list[dict[str, Any]]]:
-  """The runs and the synergy fits in `paths` (run folders, fit folders, or folders of them)."""
+def find(paths, inside: bool = False) -> tuple[list[Run], list[dict[str, Any]]]:
+  """The runs and the synergy fits in `paths` (run folders, fit folders, or folders of them).
+  A folder named here must hold one; one found inside (a report, say) may hold none."""
   runs, fits = [], []
   for path in map(pathlib.Path, paths):
     if not path.is_dir():
@@ -123,8 +124,8 @@ def find(paths) -> tuple[list[Run], list[dict[str, Any]]]:
       fits.append(json.loads((path / FIT_FILE).read_text()))
     else:
       inner = sorted(p for p in path.iterdir() if p.is_dir())
-      found = find(inner) if inner else ([], [])
-      if not found[0] and not found[1]:
+      found = find(inner, inside=True) if inner else ([], [])
+      if not found[0] and not found[1] and not inside:
         raise ValueError(f"{path} holds no run (config.json) and no synergy fit")
       runs += found[0]
       fits += found[1]

@@ -238,7 +238,10 @@ def test_report_mean_and_spread_over_seeds(tmp_path):
     row = {"step": 10, "env_steps": 0, **{f"valve{i}/success": per_task[i] for i in range(4)},
            **{f"valve{i}/return": 0.0 for i in range(4)}}
     (run / "eval.jsonl").write_text(json.dumps(row) + "\n")
+  (tmp_path / "report").mkdir()  # a report written beside the runs is passed over
+  (tmp_path / "report" / "REPORT.md").write_text("an earlier report")
   runs, _ = report.find([tmp_path])
+  assert len(runs) == 2
   table = report.solved_tables(runs, threshold=0.7)
   assert "| DiscoSyn3-L | ✓ 75% (50%–100%) [2] (paper ✓) |" in table
   assert "| 70% (50%–90%) | 3/4 (paper 4/4)" in table  # the mean over tasks, per seed
