@@ -129,7 +129,20 @@ def find(paths, inside: bool = False) -> tuple[list[Run], list[dict[str, Any]]]:
         raise ValueError(f"{path} holds no run (config.json) and no synergy fit")
       runs += found[0]
       fits += found[1]
+  if not inside:
+    _one_run_per_seed(runs)
   return runs, fits
+
+
+def _one_run_per_seed(runs: list[Run]) -> None:
+  """Two runs of one method and seed would count as two seeds: name the pair instead."""
+  seen = {}
+  for run in runs:
+    key = (run.experiment, run.task_set, tuple(run.config.tasks), run.method, run.seed)
+    if key in seen:
+      raise ValueError(f"{seen[key].path} and {run.path} are both {run.method} seed {run.seed} "
+                       f"on {run.task_set}; give the report one of them")
+    seen[key] = run
 
 
 # -- tables ---------------------------------------------------------------------

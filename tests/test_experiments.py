@@ -4,6 +4,7 @@ decoder, the sparse-reward comparison and the report."""
 
 import json
 import pathlib
+import shutil
 
 import jax
 import numpy as np
@@ -246,6 +247,10 @@ def test_report_mean_and_spread_over_seeds(tmp_path):
   assert "| DiscoSyn3-L | ✓ 75% (50%–100%) [2] (paper ✓) |" in table
   assert "| 70% (50%–90%) | 3/4 (paper 4/4)" in table  # the mean over tasks, per seed
   assert "✗" in report.solved_tables(runs, threshold=0.8)
+  # a copy of a run (an ablation, a rerun) would count as a third seed: it is refused
+  shutil.copytree(tmp_path / "run1", tmp_path / "more" / "run1-again")
+  with pytest.raises(ValueError, match="both DiscoSyn3-L seed 1 on set1"):
+    report.find([tmp_path])
 
 
 def test_train_flag_decoder_from_sets_a_frozen_space(tmp_path):
