@@ -103,12 +103,15 @@ def load_run(path: pathlib.Path) -> Run:
   config = config_lib.load(path / "config.json")
   meta_file = path / EXPERIMENT_FILE
   meta = json.loads(meta_file.read_text()) if meta_file.is_file() else {}
+  evals = _rows(path / logs.EVAL_FILE)
+  # logs kept without checkpoints (docs/results) are finished when the last step was evaluated
+  finished = (path / "final").is_dir() or bool(evals and evals[-1]["step"] >= config.steps)
   # derived from the config only where experiment.json is silent (_method_of may read a file)
   return Run(path=path, config=config, experiment=meta.get("experiment", "train"),
              method=meta["method"] if "method" in meta else _method_of(config),
              task_set=meta["set"] if "set" in meta else _set_of(config),
-             seed=meta.get("seed", config.seed), evals=_rows(path / logs.EVAL_FILE),
-             finished=(path / "final").is_dir(), scale=meta.get("scale"))
+             seed=meta.get("seed", config.seed), evals=evals, finished=finished,
+             scale=meta.get("scale"))
 
 
 def find(paths, inside: bool = False) -> tuple[list[Run], list[dict[str, Any]]]:

@@ -236,7 +236,8 @@ def test_report_mean_and_spread_over_seeds(tmp_path):
         dict(experiment="discosyn-set1", method="DiscoSyn3-L", set="set1", seed=seed, scale="cpu")))
     # seed 0 fails valve3 in part: its mean over the four valves is 0.9, seed 1's 0.5
     per_task = [success] * 3 + [0.6 if seed == 0 else success]
-    row = {"step": 10, "env_steps": 0, **{f"valve{i}/success": per_task[i] for i in range(4)},
+    # logs without a checkpoint: seed 0 evaluated its last step, seed 1 stopped before it
+    row = {"step": config.steps if seed == 0 else 10, "env_steps": 0, **{f"valve{i}/success": per_task[i] for i in range(4)},
            **{f"valve{i}/return": 0.0 for i in range(4)}}
     (run / "eval.jsonl").write_text(json.dumps(row) + "\n")
   (tmp_path / "report").mkdir()  # a report written beside the runs is passed over
@@ -245,7 +246,7 @@ def test_report_mean_and_spread_over_seeds(tmp_path):
   assert len(runs) == 2
   table = report.solved_tables(runs, threshold=0.7)
   assert "| DiscoSyn3-L | ✓ 75% (50%–100%) [2] (paper ✓) |" in table
-  assert "| 70% (50%–90%) | 3/4 (paper 4/4)" in table  # the mean over tasks, per seed
+  assert "| 70% (50%–90%) | 3/4 (paper 4/4), 1 unfinished |" in table  # mean over tasks, per seed
   assert "✗" in report.solved_tables(runs, threshold=0.8)
   # a copy of a run (an ablation, a rerun) would count as a third seed: it is refused
   shutil.copytree(tmp_path / "run1", tmp_path / "more" / "run1-again")
