@@ -20,6 +20,7 @@ import dataclasses
 import datetime
 import json
 import pathlib
+import re
 from typing import Any
 
 import numpy as np
@@ -354,8 +355,12 @@ def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = Tr
   if not runs and not fits:
     raise ValueError("no runs among the folders given")
   out = pathlib.Path(out)
-  if (out / "REPORT.md").exists() and not force:
-    raise ValueError(f"{out} already holds a report; pass --force to replace it")
+  if (out / "REPORT.md").exists():
+    if not force:
+      raise ValueError(f"{out} already holds a report; pass --force to replace it")
+    # the figures the old report shows: this one may not draw them again (--no-tsne, say)
+    for name in re.findall(r"\]\(([^)/]+\.png)\)", (out / "REPORT.md").read_text()):
+      (out / name).unlink(missing_ok=True)
   out.mkdir(parents=True, exist_ok=True)
 
   date = datetime.date.today().isoformat()

@@ -224,6 +224,12 @@ def test_report_lists_every_method_and_task(experiments, tmp_path):
     assert f"({figure})" in text
   with pytest.raises(ValueError, match="already holds a report"):
     report.write([experiments], tmp_path / "report", with_tsne=False)
+  # a replaced report takes its figures with it; a file it did not write stays
+  (tmp_path / "report" / "notes.png").write_bytes(b"mine")
+  text = report.write([experiments], tmp_path / "report", with_tsne=False, force=True).read_text()
+  assert "tsne-set1.png" not in text and not (tmp_path / "report" / "tsne-set1.png").exists()
+  assert (tmp_path / "report" / "curves-set1.png").is_file()
+  assert (tmp_path / "report" / "notes.png").is_file()
 
 
 def test_report_mean_and_spread_over_seeds(tmp_path):

@@ -1,4 +1,5 @@
-# The exact script of the 2026-12-01 long sparse PPO runs in docs/TRAINING_NOTES.md.
+# The exact script of the 2026-12-01 long sparse PPO runs in docs/TRAINING_NOTES.md
+# (its input folder was then named table1-cpu-partial).
 """Full-action PPO on the sparse goal valve, the `cpu` sparse experiment's config with 600
 train steps (768 k env steps) instead of 300: long enough to show whether PPO's first reward
 comes >= 10x later than the learned space's (76 k env steps on the mean of 3 seeds)."""
