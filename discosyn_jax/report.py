@@ -355,12 +355,10 @@ def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = Tr
   if not runs and not fits:
     raise ValueError("no runs among the folders given")
   out = pathlib.Path(out)
-  if (out / "REPORT.md").exists():
-    if not force:
-      raise ValueError(f"{out} already holds a report; pass --force to replace it")
-    # the figures the old report shows: this one may not draw them again (--no-tsne, say)
-    for name in re.findall(r"\]\(([^)/]+\.png)\)", (out / "REPORT.md").read_text()):
-      (out / name).unlink(missing_ok=True)
+  report = out / "REPORT.md"
+  if report.exists() and not force:
+    raise ValueError(f"{out} already holds a report; pass --force to replace it")
+  old_figures = set(_figures(report.read_text())) if report.exists() else set()
   out.mkdir(parents=True, exist_ok=True)
 
   date = datetime.date.today().isoformat()
@@ -433,6 +431,14 @@ def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = Tr
       curves(group, out / "sparse-return.png", "sparse goal valve: evaluation return", "return")
       lines += ["![sparse return](sparse-return.png)", ""]
 
-  report = out / "REPORT.md"
-  report.write_text("\n".join(lines))
+  text = "\n".join(lines)
+  report.write_text(text)
+  # once the new report stands: the old one's figures it did not draw again (--no-tsne, say)
+  for name in old_figures - set(_figures(text)):
+    (out / name).unlink(missing_ok=True)
   return report
+
+
+def _figures(report_text: str) -> list[str]:
+  """The figure files a REPORT.md links, each beside it."""
+  return re.findall(r"\]\(([^)/]+\.png)\)", report_text)

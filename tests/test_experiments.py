@@ -243,7 +243,8 @@ def test_report_mean_and_spread_over_seeds(tmp_path):
     # seed 0 fails valve3 in part: its mean over the four valves is 0.9, seed 1's 0.5
     per_task = [success] * 3 + [0.6 if seed == 0 else success]
     # logs without a checkpoint: seed 0 evaluated its last step, seed 1 stopped before it
-    row = {"step": config.steps if seed == 0 else 10, "env_steps": 0, **{f"valve{i}/success": per_task[i] for i in range(4)},
+    row = {"step": config.steps if seed == 0 else 10, "env_steps": 0,
+           **{f"valve{i}/success": per_task[i] for i in range(4)},
            **{f"valve{i}/return": 0.0 for i in range(4)}}
     (run / "eval.jsonl").write_text(json.dumps(row) + "\n")
   (tmp_path / "report").mkdir()  # a report written beside the runs is passed over
