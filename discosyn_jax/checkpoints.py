@@ -6,12 +6,15 @@ A run directory holds:
   checkpoints/<step>/   periodic checkpoints (the newest `keep_checkpoints` kept)
   final/                the state at the end of the run
   metrics.jsonl, eval.jsonl, tb/
+  writer.lock           while a process writes it (runs.py)
 
 A checkpoint is an orbax checkpoint plus manifest.json: its step, and the size and SHA-256
 of every file in it. It is written whole as `NAME.new` beside the others and swapped in by
 renames (atomic.py), `final/` too, so a kill at any instant leaves every checkpoint that
-was complete before it. Readers verify the manifest: a damaged checkpoint is skipped with
-one line naming it, and the newest good one is used.
+was complete before it. Readers verify the manifest (a missing one, or a file it does not
+list, is damage too): a damaged checkpoint is skipped with one line naming it, and the
+newest good one is used; of a run being written, the checkpoints that rotate away while
+read are read again (read_newest).
 """
 
 from __future__ import annotations
@@ -38,6 +41,10 @@ PERIODIC = "checkpoints"
 MANIFEST = "manifest.json"
 _ITEM = "default"  # the item folder of checkpoints written by orbax's CheckpointManager (older runs)
 _ORBAX_TMP = ".orbax-checkpoint-tmp"  # orbax's own folder while it writes
+# the release that gave every checkpoint a manifest (commit ea672cf): only a checkpoint
+# committed before it may lack one
+MANIFESTS_SINCE = "2026-11-29 22:33 UTC"
+MANIFESTS_SINCE_NS = 1795991614 * 10**9
 
 
 class Damaged(ValueError):
@@ -109,8 +116,11 @@ def _files(folder: pathlib.Path) -> list[pathlib.Path]:
 
 
 def _write(folder: pathlib.Path, arrays: dict, step: int) -> None:
-  with _quiet():
-    checkpointer = ocp.StandardCheckpointer()
+  # folders made in this thread: made by orbax's writer threads, a folder that cannot be
+  # made (a read-only mount) left the others waiting for it for 20 minutes, and the
+  # process could not exit until they gave up
+  synchronous = ocp.AsyncOptions(create_directories_asynchronously=False)
+  with _quiet(), ocp.StandardCheckpointer(async_options=synchronous) as checkpointer:
     checkpointer.save(folder.resolve(), arrays, custom_metadata={"step": step})
     checkpointer.wait_until_finished()
   files = {str(p.relative_to(folder)): {"bytes": p.stat().st_size, "sha256": _digest(p, sync=True)}
@@ -200,21 +210,33 @@ def _item(path: pathlib.Path) -> pathlib.Path:
   return path / _ITEM if (path / _ITEM).is_dir() else path
 
 
+def _older_release_step(path: pathlib.Path) -> int:
+  """The step of a checkpoint without a manifest that orbax says it committed before
+  manifests came in (a release older than MANIFESTS_SINCE wrote it); Damaged otherwise:
+  a missing manifest must not switch its checks off."""
+  try:
+    with _quiet():
+      meta = ocp.StandardCheckpointer().metadata(_item(path).resolve())
+    stamps = json.loads((_item(path) / "_CHECKPOINT_METADATA").read_text())
+    committed = stamps["commit_timestamp_nsecs"]
+  except Exception as err:  # orbax raises what its reader met
+    raise Damaged(f"checkpoint {path} is damaged: unreadable ({_reason(err)})") from None
+  if not isinstance(committed, int) or committed >= MANIFESTS_SINCE_NS:
+    raise Damaged(f"checkpoint {path} is damaged: it has no {MANIFEST} (only checkpoints "
+                  f"written before {MANIFESTS_SINCE} may lack one)")
+  name = path.name.removesuffix(atomic.OLD)
+  return int(name) if name.isdigit() else int(meta.custom_metadata["step"])
+
+
 def verify(path: pathlib.Path) -> int:
   """The step of the checkpoint at `path` after checking every file against its manifest;
-  Damaged when one is missing or differs. A checkpoint of an older version has no manifest:
-  it is trusted as far as orbax can read its metadata."""
+  Damaged when one is missing, differs, or is not in it. Only a checkpoint of a release
+  older than manifests has none (_older_release_step)."""
   path = pathlib.Path(path)
   if not path.is_dir():
     raise Damaged(f"checkpoint {path} does not exist")
   if not (path / MANIFEST).is_file():
-    try:
-      with _quiet():
-        meta = ocp.StandardCheckpointer().metadata(_item(path).resolve())
-      name = path.name.removesuffix(atomic.OLD)
-      return int(name) if name.isdigit() else int(meta.custom_metadata["step"])
-    except Exception as err:  # orbax raises what its reader met
-      raise Damaged(f"checkpoint {path} is damaged: unreadable ({_reason(err)})") from None
+    return _older_release_step(path)
   try:
     manifest = json.loads((path / MANIFEST).read_text())
     step, files = int(manifest["step"]), dict(manifest["files"])
@@ -222,10 +244,15 @@ def verify(path: pathlib.Path) -> int:
     raise Damaged(f"checkpoint {path} is damaged: its {MANIFEST} is unreadable") from None
   for name, want in sorted(files.items()):
     file = path / name
-    if not file.is_file():
-      raise Damaged(f"checkpoint {path} is damaged: {name} is missing")
-    if file.stat().st_size != want["bytes"] or _digest(file) != want["sha256"]:
+    try:
+      same = file.stat().st_size == want["bytes"] and _digest(file) == want["sha256"]
+    except OSError:  # gone, or unreadable
+      raise Damaged(f"checkpoint {path} is damaged: {name} is missing") from None
+    if not same:
       raise Damaged(f"checkpoint {path} is damaged: {name} differs from its checksum")
+  unlisted = sorted({str(p.relative_to(path)) for p in _files(path)} - set(files))
+  if unlisted:
+    raise Damaged(f"checkpoint {path} is damaged: {unlisted[0]} is not in its {MANIFEST}")
   return step
 
 
@@ -254,16 +281,44 @@ def candidates(run_dir: pathlib.Path) -> list[pathlib.Path]:
   return [path for _, _, path in sorted(found, key=lambda c: c[:2], reverse=True)]
 
 
+def _identity(path: pathlib.Path) -> tuple[int, int] | None:
+  try:
+    st = os.stat(path)
+  except OSError:
+    return None
+  return st.st_dev, st.st_ino
+
+
+def read_newest(run_dir: pathlib.Path, read, damaged) -> tuple[pathlib.Path | None, object]:
+  """(checkpoint, read(checkpoint)) of the newest checkpoint of a run that `read` takes
+  (it raises Damaged on one it does not), (None, None) when none does; `damaged(path, err)`
+  is told of each damaged one on the way.
+
+  A snapshot: the checkpoints of a run that is being written rotate (a swap, a prune) while
+  they are read; a folder replaced or removed during its read is not damaged, and the list
+  is read again."""
+  for _ in range(100):
+    for path in candidates(run_dir):
+      before = _identity(path)
+      try:
+        value = read(path)
+      except Damaged as err:
+        if before is None or _identity(path) != before:
+          break  # rotated away while read
+        damaged(path, err)
+        continue
+      if _identity(path) == before:
+        return path, value
+      break
+    else:
+      return None, None
+  raise Damaged(f"the checkpoints of {run_dir} changed every time they were read")
+
+
 def latest(run_dir: pathlib.Path, warn=warn) -> pathlib.Path | None:
   """The newest checkpoint of a run that passes verify(); `warn` gets one line for each
   damaged one skipped."""
-  for path in candidates(run_dir):
-    try:
-      verify(path)
-      return path
-    except Damaged as err:
-      warn(f"{err}; skipping it")
-  return None
+  return read_newest(run_dir, verify, lambda path, err: warn(f"{err}; skipping it"))[0]
 
 
 def read_arrays(path: pathlib.Path, prefix: str) -> dict[str, "np.ndarray"]:

@@ -7,7 +7,9 @@ from __future__ import annotations
 import argparse
 import pathlib
 import shlex
+import signal
 import sys
+import threading
 import time
 
 
@@ -73,8 +75,9 @@ def cmd_render_scenes(args) -> None:
   from discosyn_jax import render, scripted
 
   out = pathlib.Path(args.out)
+  names = tasks.expand(args.tasks)  # a bad name fails before the folder is made
   out.mkdir(parents=True, exist_ok=True)
-  for name in tasks.expand(args.tasks):
+  for name in names:
     env = tasks.make(name, backend="native")
     # a frame from the task's scripted motion (valves: the middle of a stroke, fingers dipped)
     actions = jnp.asarray(scripted.for_task(name, args.step, env.dt))
@@ -93,8 +96,10 @@ _TRAIN_FLAGS = {
     "synergies": "n_synergies", "decoder": "decoder", "alpha1": "alpha1", "alpha2": "alpha2",
     "alpha3": "alpha3", "num_envs": "num_envs", "unroll_length": "unroll_length",
     "minibatches": "num_minibatches", "epochs": "update_epochs", "lr": "learning_rate",
-    "steps": "steps", "seed": "seed", "backend": "backend", "eval_every": "eval_every",
+    "steps": "steps", "seed": "seed", "backend": "backend", "physics": "physics",
+    "eval_every": "eval_every",
     "eval_envs": "eval_envs", "checkpoint_every": "checkpoint_every",
+    "decoder_weight_decay": "decoder_weight_decay",
 }
 
 
@@ -104,7 +109,7 @@ def train_config(args, base=None):
   from experiments import presets
 
   if base is None or args.preset is not None:
-    base = presets.preset(args.preset or "quickstart")
+    base = presets.preset("quickstart" if args.preset is None else args.preset)
   changes = {field: getattr(args, flag) for flag, field in _TRAIN_FLAGS.items()
              if getattr(args, flag) is not None}
   if args.tasks:
@@ -123,11 +128,14 @@ def train_config(args, base=None):
 
 def cmd_train(args) -> None:
   from discosyn_jax import config as config_lib
-  from discosyn_jax import devices
-  from discosyn_jax import loop
+  from discosyn_jax import devices, loop, runs
 
+  if args.out == "":
+    raise UsageError("--out is empty: name a run directory (or leave --out out)")
   out = pathlib.Path(args.out or f"runs/{args.preset or 'quickstart'}-seed{args.seed or 0}")
   saved = out / loop.CONFIG_FILE
+  if args.resume and saved.is_file():  # the run's own config: what a dead writer left settled
+    runs.take_over(out)
   base = config_lib.load(saved) if args.resume and saved.is_file() else None
   config = train_config(args, base)
   devices.mesh_for(config, args.devices)  # a bad device count fails before the run directory
@@ -216,6 +224,16 @@ def cmd_experiment(args) -> None:
   print(f"experiment {args.name} finished in {(time.perf_counter() - start) / 60:.1f} min")
 
 
+def cmd_upgrade(args) -> None:
+  from discosyn_jax import config as config_lib
+  from discosyn_jax import loop, runs
+
+  for run in map(pathlib.Path, args.runs):
+    runs.refuse_if_written(run)
+    added = config_lib.upgrade(loop.find_run_dir(run) / loop.CONFIG_FILE)
+    print(f"{run}: {'added ' + ', '.join(added) if added else 'up to date'}")
+
+
 def cmd_report(args) -> None:
   from discosyn_jax import report
 
@@ -252,6 +270,9 @@ def build_parser() -> argparse.ArgumentParser:
                  "added to the reward of every control step; " + preset_default("alpha2"))
   p.add_argument("--alpha3", type=float, help="weight of the decoder entropy bonus H(p(a|z)) in "
                  "the loss; " + preset_default("alpha3"))
+  p.add_argument("--decoder-weight-decay", type=float, help="AdamW weight decay of the decoder's "
+                 "weights, a tie-breaker between adequate synergy spaces (issue 26; 0: the paper's "
+                 "update); " + preset_default("decoder_weight_decay"))
   p.add_argument("--lr", type=float, help="Adam learning rate of the policy, value and decoder "
                  "networks; " + preset_default("learning_rate"))
   p.add_argument("--num-envs", type=int, help="parallel envs per task; "
@@ -276,6 +297,10 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("--backend", choices=["auto", "native", "mjx"], help="physics: native (MuJoCo C, "
                  "CPU), mjx, or auto (native on a CPU, mjx on an accelerator); "
                  + preset_default("backend"))
+  p.add_argument("--physics", choices=["fast", "reference"], help="the tasks' physics: fast "
+                 "(each task's cheapest faithful setting) or reference (4 ms x 10 substeps, the "
+                 "runs before 2026-12-02); docs/BENCHMARKS.md, 'Physics settings'; "
+                 + preset_default("physics"))
   p.add_argument("--decoder-from", help="learn in the frozen synergy space of a run folder or a "
                  "synergy file (.npz): its decoder, no discriminator bonus or decoder entropy "
                  "(default: none, the decoder is learned)")
@@ -327,7 +352,8 @@ def build_parser() -> argparse.ArgumentParser:
   p = sub.add_parser("experiment", help="run one of the paper's experiments, or all, at a scale "
                      "(experiments/paper.py); finished steps are kept, unfinished ones resumed")
   p.add_argument("name", help="discosyn-set1 | discosyn-set2 | baselines-set1 | baselines-set2 | "
-                 "transfer | sparse | all")
+                 "transfer | sparse | all; the planted-synergy test bed: discosyn-planted | "
+                 "discosyn-planted_slack")
   p.add_argument("--scale", default="cpu", help="ci (seconds per run) | cpu (minutes per run on "
                  "2 cores) | gpu (one accelerator); default: %(default)s")
   p.add_argument("--seeds", type=int, nargs="+",
@@ -354,6 +380,11 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("--no-tsne", action="store_true", help="skip the t-SNE (it rolls policies out)")
   p.add_argument("--force", action="store_true", help="replace a report already in --out")
   p.set_defaults(fn=cmd_report)
+
+  p = sub.add_parser("upgrade", help="write into the config.json of runs made by an older "
+                     "release the fields added since, with the values it ran")
+  p.add_argument("runs", nargs="+", help="run directories")
+  p.set_defaults(fn=cmd_upgrade)
 
   p = sub.add_parser("demo", help="build task scenes, step them with random actions, print figures")
   p.add_argument("tasks", nargs="*", default=["set1"], help="tasks or task sets (default: set1)")
@@ -395,8 +426,32 @@ def add_bench_parser(sub) -> None:
   p.set_defaults(fn=bench.run)
 
 
+class Terminated(KeyboardInterrupt):
+  """SIGTERM (a scheduler ending the job): it stops a command as Ctrl-C does."""
+
+
+def _terminate(signum, frame):
+  raise Terminated()
+
+
 def main(argv: list[str] | None = None) -> int:
   args = build_parser().parse_args(argv)
+  # a handler only the main thread may set (a notebook may call main from another)
+  main_thread = threading.current_thread() is threading.main_thread()
+  previous = signal.signal(signal.SIGTERM, _terminate) if main_thread else None
+  try:
+    return _run(args)
+  except KeyboardInterrupt as err:  # Ctrl-C or SIGTERM: one line (where a run resumes from)
+    how, signum = ("SIGTERM", signal.SIGTERM) if isinstance(err, Terminated) else \
+        ("Ctrl-C", signal.SIGINT)
+    print(f"discosyn: stopped by {how}{': ' + str(err) if str(err) else ''}", file=sys.stderr)
+    return 128 + signum
+  finally:
+    if main_thread:  # (None: a handler set outside Python, which cannot be set back)
+      signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
+
+
+def _run(args) -> int:
   import discosyn_jax
 
   if getattr(args, "distributed", False):  # before anything touches a device

@@ -9,16 +9,28 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import pathlib
 from typing import Any
 
 from discosyn_jax import atomic, checks
 
 DECODERS = ("linear", "mlp", "identity")
+CONTROL_DT = 0.04  # s: one control step of every task
+# The physics of the tasks (tasks/__init__.py, physics_overrides): "reference" is 10 MuJoCo
+# steps of 4 ms per control step for every task, what every run before this field ran;
+# "fast" is each task's cheapest setting that stays faithful to the reference
+# (docs/BENCHMARKS.md, "Physics settings"). A profile never changes once runs use it: a
+# new choice gets a new name.
+PHYSICS = ("fast", "reference")
 
 # Fields that may differ between a run and its resumption: they change how long and how
 # often, never what the state holds.
 RESUMABLE = frozenset({"steps", "eval_every", "eval_envs", "checkpoint_every", "keep_checkpoints"})
 MAX_STEPS = 2**31 - 1  # the state counts train steps in an int32
+# Fields added since the first release, each with the value every run before it had: a
+# config.json without them is refused (never filled with today's default) until
+# `discosyn upgrade RUN` writes these values into it (upgrade below).
+ADDED = {"squash_z": False, "physics": "reference", "reset_pool": False, "decoder_weight_decay": 0.0}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -37,6 +49,10 @@ class TrainConfig:
   # the decoder reads tanh(z): synergy activations bounded to [-1, 1], so that the heads
   # cannot make up for any decoder by driving z far out (issue 13's hypothesis)
   squash_z: bool = False
+  # decoupled weight decay of the decoder's weights (AdamW): among the decoders that serve
+  # the tasks equally well, the smallest, whose columns keep only the directions the tasks
+  # use; a tie-breaker between adequate synergy spaces (issue 26). 0: the paper's update
+  decoder_weight_decay: float = 0.0
   # the extended reward, paper Eq. 2: alpha1 H(pi(z|s,n)) + alpha2 log q(z|a) + alpha3 H(p(a|z))
   alpha1: float = 1e-3
   alpha2: float = 1e-2
@@ -66,6 +82,10 @@ class TrainConfig:
   steps: int = 100  # train steps; each one is len(tasks) * num_envs * unroll_length env steps
   seed: int = 0
   backend: str = "auto"  # physics: auto | native | mjx
+  physics: str = "fast"  # the tasks' physics settings: fast | reference (PHYSICS above)
+  # episodes restart from num_envs initial states per task made at init, drawn at random,
+  # not from a fresh reset: MJX's train step then compiles no mjx.forward (wrappers.py)
+  reset_pool: bool = False
   eval_every: int = 20  # train steps between deterministic evaluations (0: only at the end)
   eval_envs: int = 32  # episodes per task in an evaluation
   checkpoint_every: int = 50  # train steps between checkpoints (0: only the final one)
@@ -95,6 +115,8 @@ class TrainConfig:
       raise ValueError("the identity decoder (full-action PPO) cannot take a decoder_from")
     if not self.decoder_noise and self.alpha3:
       raise ValueError("a noiseless decoder (decoder_noise false) has no entropy: set alpha3 = 0")
+    if self.physics not in PHYSICS:
+      raise ValueError(f"unknown physics {self.physics!r}; known: {', '.join(PHYSICS)}")
     positive = ("num_envs", "unroll_length", "num_minibatches", "update_epochs", "steps",
                 "eval_envs", "keep_checkpoints")
     for name in positive:
@@ -102,7 +124,8 @@ class TrainConfig:
         raise ValueError(f"{name} must be at least 1, not {getattr(self, name)}")
     if self.steps > MAX_STEPS:
       raise ValueError(f"steps must be at most {MAX_STEPS}, not {self.steps}")
-    for name in ("eval_every", "checkpoint_every", "alpha1", "alpha2", "alpha3", "value_coef"):
+    for name in ("eval_every", "checkpoint_every", "alpha1", "alpha2", "alpha3", "value_coef",
+                 "decoder_weight_decay"):
       if getattr(self, name) < 0:
         raise ValueError(f"{name} must not be negative, not {getattr(self, name)}")
     for name in ("policy_hidden", "value_hidden", "decoder_hidden", "discriminator_hidden"):
@@ -129,6 +152,9 @@ class TrainConfig:
     unknown = sorted(set(values) - set(fields))
     if unknown:
       raise ValueError(f"unknown config field(s): {', '.join(unknown)}")
+    missing = [name for name in fields if name not in values]
+    if missing:
+      raise ValueError(f"missing config field(s): {', '.join(missing)}")
     # JSON has no tuples
     return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in values.items()})
 
@@ -152,7 +178,32 @@ def load(path) -> TrainConfig:
   try:
     return TrainConfig.from_dict(values).validate()
   except (TypeError, ValueError) as err:
+    older = sorted(set(ADDED) - set(values))
+    hint = (f"; a run of an older release: `discosyn upgrade {pathlib.Path(path).parent}` adds "
+            f"{', '.join(f'{k} = {json.dumps(ADDED[k])}' for k in older)}, as it ran"
+            if older and "missing" in str(err) else "")
+    raise ValueError(f"config file {path}: {err}{hint}") from None
+
+
+def upgrade(path) -> list[str]:
+  """Write the fields added since an older release (ADDED) into the config file at
+  `path`, with the values that release ran; return their names. Anything else missing or
+  wrong is still refused by load()."""
+  try:
+    values = json.loads(pathlib.Path(path).read_text())
+  except json.JSONDecodeError as err:
+    raise ValueError(f"malformed config file {path}: {err}") from None
+  if not isinstance(values, dict):
+    raise ValueError(f"malformed config file {path}: not a JSON object")
+  added = [k for k in ADDED if k not in values]
+  upgraded = {**values, **{k: ADDED[k] for k in added}}
+  try:  # the rest must be whole already
+    TrainConfig.from_dict(upgraded).validate()
+  except (TypeError, ValueError) as err:
     raise ValueError(f"config file {path}: {err}") from None
+  if added:
+    atomic.write_text(path, json.dumps(upgraded, indent=1))
+  return added
 
 
 def mismatches(saved: TrainConfig, requested: TrainConfig) -> list[str]:

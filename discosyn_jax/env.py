@@ -24,7 +24,7 @@ class HandEnv(Env):
     lo, hi = (jnp.asarray(self.mj_model.actuator_ctrlrange[:, i], jnp.float32) for i in (0, 1))
     self._ctrl_mid, self._ctrl_half = (hi + lo) / 2, (hi - lo) / 2
     self.episode_length = task.config.episode_length
-    self.dt = float(self.mj_model.opt.timestep) * task.config.n_substeps
+    self.dt = task.dt
     self._obs_shape = jax.eval_shape(self.reset, jax.random.key(0)).obs.shape
 
   @property

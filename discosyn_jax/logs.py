@@ -7,6 +7,7 @@ and the same numbers as TensorBoard event files (tensorboardX: no TensorFlow nee
 from __future__ import annotations
 
 import json
+import lzma
 import pathlib
 import time
 
@@ -15,6 +16,9 @@ from discosyn_jax import atomic
 METRICS_FILE = "metrics.jsonl"  # one row per train step
 EVAL_FILE = "eval.jsonl"  # one row per deterministic evaluation
 TENSORBOARD_DIR = "tb"
+# A kept run's bulky log compressed (docs/results keeps metrics.jsonl as metrics.jsonl.xz:
+# `xz -9 RUN/metrics.jsonl`); readers take either.
+ARCHIVED = ".xz"
 
 # bookkeeping columns of the rows: the x axes, not curves of their own
 _AXES = frozenset({"step", "env_steps", "wall_s", "finite"})
@@ -26,7 +30,9 @@ def read_jsonl(path: pathlib.Path) -> list[dict]:
   path = pathlib.Path(path)
   if not path.is_file():
     raise ValueError(f"{path} does not exist")
-  lines = path.read_text().splitlines(keepends=True)
+  opener = lzma.open if path.suffix == ARCHIVED else open
+  with opener(path, "rt") as f:
+    lines = f.read().splitlines(keepends=True)
   rows = []
   for number, line in enumerate(lines, 1):
     if not line.strip():
@@ -41,6 +47,15 @@ def read_jsonl(path: pathlib.Path) -> list[dict]:
       raise ValueError(f"{path}, line {number}: not a JSON object")
     rows.append(row)
   return rows
+
+
+def read_log(path: pathlib.Path) -> list[dict]:
+  """The rows of the log at `path` or of its archive `path`.xz; none when neither exists."""
+  path = pathlib.Path(path)
+  for candidate in (path, path.with_name(path.name + ARCHIVED)):
+    if candidate.is_file():
+      return read_jsonl(candidate)
+  return []
 
 
 def tag(name: str, kind: str) -> str:

@@ -12,19 +12,19 @@ import json
 import math
 import os
 import pathlib
-import shutil
+import shlex
 import sys
 import time
 from typing import Any
 
 import jax
 
-from discosyn_jax import checkpoints, checks, logs, plots
+from discosyn_jax import checkpoints, checks, logs, plots, runs
 from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.train import Trainer, TrainState
 
-CONFIG_FILE = "config.json"
+CONFIG_FILE = runs.CONFIG_FILE
 
 
 class TrainingDiverged(RuntimeError):
@@ -40,9 +40,10 @@ def run_config(run_dir: pathlib.Path, config: TrainConfig, resume: bool, force: 
   """Check the run directory against what is asked, writing nothing, and return the config
   to run.
 
-  A directory that holds a run is only continued (`resume`) or replaced (`force`), never
-  silently overwritten; resuming keeps the run's config, except the fields that say how
-  long and how often (config.RESUMABLE), which are taken from `config`.
+  A directory that holds a run is only continued (`resume`) or replaced (`force`, a run
+  this product made only), never silently overwritten, and never while another process
+  writes it; resuming keeps the run's config, except the fields that say how long and how
+  often (config.RESUMABLE), which are taken from `config`.
   """
   run_dir = pathlib.Path(run_dir)
   if run_dir.exists() and not run_dir.is_dir():
@@ -61,9 +62,13 @@ def run_config(run_dir: pathlib.Path, config: TrainConfig, resume: bool, force: 
     raise ValueError(f"{run_dir} already holds a run; pass --resume to continue it or "
                      f"--force to replace it")
   # --force replaces a run, never a folder of something else
-  if run_dir.exists() and not holds_run and any(run_dir.iterdir()):
+  if holds_run and not runs.is_run(run_dir):
+    raise ValueError(f"{run_dir} holds a {CONFIG_FILE} but no run of discosyn (none of "
+                     f"{', '.join(sorted(runs.RUN_NAMES - {runs.ASIDE}))}); --force replaces "
+                     f"only a run: choose another directory")
+  if run_dir.exists() and not holds_run and runs.contents(run_dir):
     raise ValueError(f"{run_dir} is not empty and holds no run; choose another directory")
-  _check_writable(run_dir.parent if force and run_dir.exists() else run_dir)
+  _check_writable(run_dir)
   return config.validate()
 
 
@@ -75,38 +80,6 @@ def _check_writable(path: pathlib.Path) -> None:
     raise ValueError(f"cannot write {path}: {existing} is a file, not a folder")
   if not os.access(existing, os.W_OK | os.X_OK):
     raise ValueError(f"cannot write {path}: {existing} is not writable")
-
-
-def make_run_dir(run_dir: pathlib.Path, config: TrainConfig, force: bool) -> pathlib.Path | None:
-  """Create the run directory of a new run (replacing a run there with `force`) and write
-  its config; return the folder to remove if the run fails before its first step (the
-  topmost one created here), None when `run_dir` was there already."""
-  run_dir = pathlib.Path(run_dir)
-  created = None
-  for path in (run_dir, *run_dir.parents):
-    if path.exists():
-      break
-    created = path
-  try:
-    if force and run_dir.exists():
-      shutil.rmtree(run_dir)
-      created = run_dir
-    run_dir.mkdir(parents=True, exist_ok=True)
-    config_lib.save(config, run_dir / CONFIG_FILE)
-  except OSError as err:
-    _remove_new_run(run_dir, created)
-    raise ValueError(f"cannot write the run directory {run_dir}: {err.strerror or err}") from None
-  return created
-
-
-def _remove_new_run(run_dir: pathlib.Path, created: pathlib.Path | None) -> None:
-  """Leave no trace of a run that never made a step: the folders made for it, or what it
-  wrote into a folder that was there before."""
-  if created is not None:
-    shutil.rmtree(created, ignore_errors=True)
-  elif run_dir.is_dir():
-    for path in run_dir.iterdir():
-      shutil.rmtree(path, ignore_errors=True) if path.is_dir() else path.unlink(missing_ok=True)
 
 
 def find_run_dir(path: pathlib.Path) -> pathlib.Path:
@@ -129,13 +102,30 @@ def finished(run_dir: pathlib.Path, config: TrainConfig) -> bool:
 def load_run(path: pathlib.Path) -> tuple[TrainConfig, pathlib.Path]:
   """(config, checkpoint) of a run directory (its newest good checkpoint) or a checkpoint
   folder."""
+  config, checkpoint, _ = read_run(path, checkpoints.verify)
+  return config, checkpoint
+
+
+def read_run(path: pathlib.Path, read,
+             warn=checkpoints.warn) -> tuple[TrainConfig, pathlib.Path, Any]:
+  """(config, checkpoint, read(checkpoint)) of a run directory (its newest checkpoint that
+  `read` takes, a snapshot even of a run being written: checkpoints.read_newest) or of a
+  checkpoint folder. Of a run another process is writing, one line says so and what was read."""
   path = pathlib.Path(path)
   run_dir = find_run_dir(path)
   config = config_lib.load(run_dir / CONFIG_FILE)
-  checkpoint = checkpoints.latest(run_dir) if path == run_dir else path
+  if path != run_dir:
+    return config, path, read(path)
+  checkpoint, value = checkpoints.read_newest(
+      run_dir, read, lambda damaged, err: warn(f"{err}; skipped it"))
+  writer = runs.writer_of(run_dir)
   if checkpoint is None:
-    raise ValueError(f"{run_dir} holds no good checkpoint yet")
-  return config, checkpoint
+    raise ValueError(f"{run_dir} holds no good checkpoint yet"
+                     + (f" (it is being written by {writer})" if writer else ""))
+  if writer:
+    warn(f"{run_dir} is being written by {writer}: read its checkpoint {checkpoint}, "
+         f"step {checkpoints.verify(checkpoint)}")
+  return config, checkpoint, value
 
 
 def initial_decoder(config: TrainConfig):
@@ -169,35 +159,27 @@ def restore(trainer: Trainer, checkpoint: pathlib.Path) -> TrainState:
   return checkpoints.restore(checkpoint, trainer.init())
 
 
-def restore_latest(trainer: Trainer, run_dir: pathlib.Path, remove_damaged: bool = False,
-                   warn=checkpoints.warn) -> tuple[pathlib.Path | None, TrainState | None]:
+def resume_latest(trainer: Trainer, run_dir: pathlib.Path,
+                  warn=checkpoints.warn) -> tuple[pathlib.Path | None, TrainState | None]:
   """(checkpoint, state) of the newest checkpoint of a run that restores, (None, None) when
-  none does. Each damaged one on the way is named in one line (and, for a run that goes
-  on from an older one, removed: it will be written anew)."""
-  for checkpoint in checkpoints.candidates(run_dir):
-    try:
-      return checkpoint, restore(trainer, checkpoint)
-    except checkpoints.Damaged as err:
-      if remove_damaged:
-        checkpoints.remove(checkpoint)
-      warn(f"{err}; {'removed' if remove_damaged else 'skipped'} it")
-  return None, None
+  none does. Each damaged one on the way is named in one line and removed: the run goes
+  on from an older one and writes it anew."""
+  def damaged(checkpoint, err):
+    checkpoints.remove(checkpoint)
+    warn(f"{err}; removed it")
+
+  return checkpoints.read_newest(run_dir, lambda path: restore(trainer, path), damaged)
 
 
 def load_trained(path: pathlib.Path, make_trainer=Trainer, **changes) -> tuple[Trainer, TrainState]:
   """The trainer and the restored state of a run (its newest checkpoint that restores) or
   of a checkpoint; `changes` replace config fields that do not change the state's layout
   (backend, eval_envs); `make_trainer(config)` builds the trainer (tests give tiny envs)."""
-  path = pathlib.Path(path)
   run_dir = find_run_dir(path)
   config = config_lib.load(run_dir / CONFIG_FILE)
   trainer = make_trainer(config.replace(**changes).validate())
   checks.memory(trainer.config, trainer.envs)
-  if path != run_dir:
-    return trainer, restore(trainer, path)
-  checkpoint, state = restore_latest(trainer, run_dir)
-  if state is None:
-    raise ValueError(f"{run_dir} holds no good checkpoint yet")
+  _, _, state = read_run(path, lambda checkpoint: restore(trainer, checkpoint))
   return trainer, state
 
 
@@ -227,27 +209,62 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, f
   task's deterministic success is at least this.
 
   Everything that can refuse the run (the config, the folder, the envs, the memory they
-  need) is checked before the run directory is made. Continuing a run restores its newest
-  good checkpoint and cuts its logs back to that step. A write that fails mid-run (a full
-  disk) stops it with WriteFailed, naming the last good checkpoint.
+  need) is checked before the run directory is made; the run directory is then this
+  process's alone to its end (runs.Writer). Continuing a run restores its newest good
+  checkpoint and cuts its logs back to that step. A new run that ends before its first
+  checkpoint leaves no trace (a run it replaces is back). A write that fails mid-run (a full
+  disk) stops it with WriteFailed, Ctrl-C (or SIGTERM) with KeyboardInterrupt, both
+  naming the last good checkpoint.
   """
   run_dir = pathlib.Path(run_dir)
+  runs.refuse_if_written(run_dir)
   config = run_config(run_dir, config, resume, force)
   trainer = trainer or Trainer(config, devices=devices)
   checks.memory(config, trainer.envs)
-  created = None if resume else make_run_dir(run_dir, config, force)
-  try:
-    last_good, state = _start(trainer, run_dir, resume, log)
-    start = time.perf_counter()
-    train_step = trainer.train_step.lower(state).compile()
-    compile_s = time.perf_counter() - start
-  except BaseException:  # nothing was learnt: a new run leaves no folder behind
+  with runs.Writer(run_dir) as writer:
+    # again, now that it is ours: another process may have made or replaced a run there
+    config = run_config(run_dir, config, resume, force)
     if not resume:
-      _remove_new_run(run_dir, created)
-    raise
+      writer.begin(lambda: config_lib.save(config, run_dir / CONFIG_FILE), replace=force)
+    at = {"step": 0, "checkpoint": None}  # where the run is: what a failure names
+    try:
+      return _train(trainer, run_dir, resume, writer, at, progress, log, stop_at)
+    except BaseException as err:
+      undone = writer.new and not writer.kept
+      replaced = writer.undo() if undone else False
+      where = _where(at["checkpoint"], undone, replaced)
+      if isinstance(err, KeyboardInterrupt):  # the same class: the CLI tells Ctrl-C from SIGTERM
+        newest = None if undone else checkpoints.latest(run_dir, warn=lambda _: None)
+        if newest:  # (a save the signal cut short may have made a newer one than at's)
+          where = (f"it resumes from {newest}: discosyn train --out "
+                   f"{shlex.quote(str(run_dir))} --resume")
+        raise type(err)(f"training stopped at step {at['step']}; {where}") from None
+      if isinstance(err, OSError):  # a full disk, a folder made read-only, a checkpoint not written
+        what = str(err) if isinstance(err, checkpoints.SaveFailed) else \
+            f"could not write {err.filename or run_dir}: {err.strerror or err}"
+        raise WriteFailed(f"training stopped at step {at['step']}: {what}; {where}") from None
+      if isinstance(err, TrainingDiverged):
+        raise TrainingDiverged(f"{err}; {where}") from None
+      raise
+
+
+def _train(trainer: Trainer, run_dir: pathlib.Path, resume: bool, writer: runs.Writer,
+           at: dict, progress: bool, log, stop_at: float | None) -> dict[str, Any]:
+  """The run itself, in a folder that is ours; `at` follows its step and last good
+  checkpoint."""
+  config = trainer.config
+  at["checkpoint"], state = _start(trainer, run_dir, resume, log)
+  at["step"] = int(state.step)
+  start = time.perf_counter()
+  train_step = trainer.train_step.lower(state).compile()
+  compile_s = time.perf_counter() - start
   log(f"train step compiled in {compile_s:.1f} s; {config.env_steps_per_train_step:,} env steps "
       f"per train step ({len(config.tasks)} tasks x {config.num_envs} envs x "
       f"{config.unroll_length} steps)")
+
+  def save(final: bool = False) -> None:
+    at["checkpoint"] = checkpoints.save(run_dir, state, config.keep_checkpoints, final=final)
+    writer.keep()
 
   start_step = int(state.step)
   reference = decoder_reference(trainer, state, log)
@@ -273,7 +290,7 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, f
         for name in config.tasks:  # no episode ended in this rollout: no return or success to log
           if metrics.get(f"{name}/episodes") == 0:
             del metrics[f"{name}/return"], metrics[f"{name}/success"]
-        step = int(state.step)
+        step = at["step"] = int(state.step)
         now = time.perf_counter()
         metrics.update(step=step, env_steps=step * config.env_steps_per_train_step,
                        env_steps_per_s=config.env_steps_per_train_step / (now - tick),
@@ -283,8 +300,7 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, f
         metrics_file.flush()
         board.write(metrics, "train")
         if not metrics["finite"] or not math.isfinite(metrics["loss"]):
-          raise TrainingDiverged(f"non-finite loss or parameters at step {step}; training stopped, "
-                                 f"{_where(last_good)}")
+          raise TrainingDiverged(f"non-finite loss or parameters at step {step}; training stopped")
         if bar is not None:
           shown.update({n: metrics[f"{n}/success"] for n in config.tasks if f"{n}/success" in metrics})
           bar.set_postfix_str(" ".join(f"{n}:{v:.0%}" for n, v in list(shown.items())[:6]),
@@ -298,19 +314,15 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, f
                 "the run ends here")
             break
         if config.checkpoint_every and step % config.checkpoint_every == 0:
-          last_good = checkpoints.save(run_dir, state, config.keep_checkpoints)
+          save()
       if bar is not None:
         bar.close()
         bar = None
       if evaluated_at != step:
         results = evaluate(trainer, state)
         _log_eval((eval_file, board), results, step, config, time.perf_counter() - start)
-    last_good = checkpoints.save(run_dir, state, config.keep_checkpoints, final=True)
+    save(final=True)
     curves = plots.run_curves(run_dir, run_dir / plots.PLOTS_DIR)
-  except OSError as err:  # a full disk, a folder made read-only, a checkpoint not written
-    what = str(err) if isinstance(err, checkpoints.SaveFailed) else \
-        f"could not write {err.filename or run_dir}: {err.strerror or err}"
-    raise WriteFailed(f"training stopped at step {step}: {what}; {_where(last_good)}") from None
   finally:
     if bar is not None:
       bar.close()
@@ -324,7 +336,7 @@ def _start(trainer: Trainer, run_dir: pathlib.Path, resume: bool, log):
   resuming (damaged ones on the way removed), else (None, a fresh state)."""
   if resume:
     checkpoints.tidy(run_dir)
-    checkpoint, state = restore_latest(trainer, run_dir, remove_damaged=True)
+    checkpoint, state = resume_latest(trainer, run_dir)
     if state is not None:
       log(f"resumed from {checkpoint} at step {int(state.step)}")
       return checkpoint, state
@@ -345,8 +357,14 @@ def _cut_logs(run_dir: pathlib.Path, step: int) -> tuple[list[dict], list[dict]]
           logs.cut(run_dir / logs.EVAL_FILE, step - 1))
 
 
-def _where(checkpoint: pathlib.Path | None) -> str:
-  return f"the last good checkpoint is {checkpoint}" if checkpoint else "no checkpoint was written"
+def _where(checkpoint: pathlib.Path | None, undone: bool, replaced: bool) -> str:
+  """What a run that stopped left: its last good checkpoint, or nothing."""
+  if checkpoint and not undone:
+    return f"the last good checkpoint is {checkpoint}"
+  if undone:  # a new run without a checkpoint was removed
+    return ("the new run made no checkpoint and was removed; the run it was to replace is "
+            "back as it was" if replaced else "the new run made no checkpoint and was removed")
+  return "no checkpoint was written"
 
 
 def _log_eval(outputs, results, step, config, wall_s):

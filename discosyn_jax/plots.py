@@ -33,8 +33,8 @@ def read_run(run_dir: pathlib.Path) -> tuple[config_lib.TrainConfig, list[dict],
   if not config_file.is_file():
     raise ValueError(f"{run_dir} holds no run (no config.json)")
   config = config_lib.load(config_file)
-  metrics = logs.read_jsonl(run_dir / logs.METRICS_FILE) if (run_dir / logs.METRICS_FILE).is_file() else []
-  evals = logs.read_jsonl(run_dir / logs.EVAL_FILE) if (run_dir / logs.EVAL_FILE).is_file() else []
+  metrics = logs.read_log(run_dir / logs.METRICS_FILE)
+  evals = logs.read_log(run_dir / logs.EVAL_FILE)
   if not metrics:
     raise ValueError(f"{run_dir} holds no training steps yet")
   return config, metrics, evals

@@ -100,10 +100,15 @@ def loss(params, model: DiscoSyn, samples: Sequence[Samples], config: TrainConfi
 
 def optimizer(config: TrainConfig) -> optax.GradientTransformation:
   """Adam per role: heads and decoder share one (the PPO objective), the discriminator has
-  its own learning rate, a frozen decoder gets no updates at all."""
+  its own learning rate, a frozen decoder gets no updates at all. A decoder weight decay
+  shrinks the decoder's weights (kernels, not biases or noise) as AdamW does."""
 
-  def transform(lr):
-    return optax.chain(optax.clip_by_global_norm(config.max_grad_norm), optax.adam(lr))
+  def transform(lr, decay=0.0):
+    step = optax.adam(lr)  # without decay: the optimiser state of every earlier run
+    if decay:
+      step = optax.chain(optax.scale_by_adam(), optax.add_decayed_weights(decay, _decoder_weights),
+                         optax.scale_by_learning_rate(lr))
+    return optax.chain(optax.clip_by_global_norm(config.max_grad_norm), step)
 
   def labels(params):
     def label(name):
@@ -114,6 +119,15 @@ def optimizer(config: TrainConfig) -> optax.GradientTransformation:
                        for name, sub in params["params"].items()}}
 
   return optax.multi_transform(
-      {"policy": transform(config.learning_rate),
+      {"policy": transform(config.learning_rate,
+                           0.0 if config.freeze_decoder else config.decoder_weight_decay),
        "discriminator": transform(config.discriminator_learning_rate),
        "frozen": optax.set_to_zero()}, labels)
+
+
+def _decoder_weights(params):
+  """True at the decoder's kernels: what the decoder weight decay shrinks."""
+  def weight(path, _):
+    names = [str(getattr(k, "key", k)) for k in path]
+    return "synergy_decoder" in names and names[-1] == "kernel"
+  return jax.tree_util.tree_map_with_path(weight, params)

@@ -41,16 +41,12 @@ PAPER_SOLVED = {
 }
 PAPER_PCA_VARIANCE = {"set1": {3: 0.415, 4: 0.508, 6: 0.628}}
 METHOD_ORDER = ("PPO", "PCA4", "AE4", "PCA6", "AE6")
-for _b in (3, 4, 6):  # each DiscoSyn row above its random-decoder control
-  METHOD_ORDER += tuple(f"{m}{_b}-{k}" for k in ("L", "NL") for m in ("DiscoSyn", "Random"))
+for _b in (3, 4, 6):  # each DiscoSyn row above its random-decoder controls
+  METHOD_ORDER += tuple(f"{m}{_b}-{k}{c}" for k in ("L", "NL") for m, c in (
+      ("DiscoSyn", ""), ("Random", ""), ("Random", "-zfree"), ("Random", "-matched")))
 MAIN_EXPERIMENTS = ("discosyn", "baselines")
 EXPERIMENT_FILE = "experiment.json"  # in a run folder: experiment, method, set, seed, scale
 FIT_FILE = "explained_variance.json"  # in a folder of synergy files: what the fits explain
-
-
-def _rows(path: pathlib.Path) -> list[dict[str, Any]]:
-  """A log's rows; none yet for a run that has not written it."""
-  return logs.read_jsonl(path) if pathlib.Path(path).is_file() else []
 
 
 @dataclasses.dataclass
@@ -101,10 +97,15 @@ def _set_of(config: TrainConfig) -> str:
 
 
 def load_run(path: pathlib.Path) -> Run:
+  from discosyn_jax import checkpoints, runs
+
   config = config_lib.load(path / "config.json")
+  writer = runs.writer_of(path)
+  if writer:  # its logs are read as far as they go now
+    checkpoints.warn(f"{path} is being written by {writer}: read its logs as they are now")
   meta_file = path / EXPERIMENT_FILE
   meta = json.loads(meta_file.read_text()) if meta_file.is_file() else {}
-  evals = _rows(path / logs.EVAL_FILE)
+  evals = logs.read_log(path / logs.EVAL_FILE)
   # logs kept without checkpoints (docs/results) are finished when the last step was evaluated
   finished = (path / "final").is_dir() or bool(evals and evals[-1]["step"] >= config.steps)
   # derived from the config only where experiment.json is silent (_method_of may read a file)
@@ -238,7 +239,7 @@ def decoder_table(runs: list[Run], last: int = 10) -> str:
   lines = ["| run | env steps | W change | principal cosines | decoder / heads grad norm "
            "| bonus / reward per step |", "|---|---|---|---|---|---|"]
   for run in sorted(runs, key=lambda r: (r.task_set, r.method, r.seed)):
-    rows = [r for r in _rows(run.path / logs.METRICS_FILE) if "decoder/change" in r][-last:]
+    rows = [r for r in logs.read_log(run.path / logs.METRICS_FILE) if "decoder/change" in r][-last:]
     if not rows:
       continue
     end = rows[-1]
@@ -255,11 +256,60 @@ def decoder_table(runs: list[Run], last: int = 10) -> str:
   return "\n".join(lines) + "\n" if len(lines) > 2 else ""
 
 
+def _spread(values) -> str:
+  """mean (min–max) [count] of some overlaps; – for none."""
+  values = np.asarray(values, float)
+  if values.size == 0:
+    return "–"
+  spread = f" ({values.min():.2f}–{values.max():.2f})" if values.size > 1 else ""
+  return f"{values.mean():.2f}{spread} [{values.size}]"
+
+
+def discovery_table(runs: list[Run]) -> str:
+  """Is the synergy space discovered? Per method and set with a decoder: the overlaps
+  (diagnostics.py) of the seeds' learned subspaces, pair by pair, beside those of the same
+  seeds' initial decoders; each seed's overlap with its own start, and with the planted
+  span on planted tasks (both as logged at the run's last step); and the chance level."""
+  from discosyn_jax import diagnostics, discovery
+
+  lines = ["| method | set | learned, seed pairs | initial, seed pairs | each seed with its start "
+           "| each seed with the planted span | chance |", "|---|---|---|---|---|---|---|"]
+  decoders = [r for r in runs if r.config.decoder != "identity"]
+  for task_set in sorted({r.task_set for r in decoders}):
+    for method in _order({r.method for r in decoders if r.task_set == task_set}):
+      group = sorted((r for r in decoders if r.task_set == task_set and r.method == method),
+                     key=lambda r: r.seed)
+      learned = [b for b in map(discovery.learned_basis, (r.path for r in group)) if b is not None]
+      initial = [b for b in map(discovery.initial_basis, (r.config for r in group)) if b is not None]
+      ends = [_last_logged(r) for r in group]
+      start = [e["decoder/overlap_start"] for e in ends if "decoder/overlap_start" in e]
+      planted = [e["decoder/overlap_planted"] for e in ends if "decoder/overlap_planted" in e]
+      b = group[0].config.n_synergies
+      lines.append(f"| {method} | {task_set} | {_spread(discovery.cross_seed(learned))} | "
+                   f"{_spread(discovery.cross_seed(initial))} | {_spread(start)} | "
+                   f"{_spread(planted)} | {diagnostics.chance_overlap(b, b):.2f} |")
+  return "\n".join(lines) + "\n" if len(lines) > 2 else ""
+
+
+def _last_logged(run: Run) -> dict[str, Any]:
+  """The decoder's figures at the last logged train step of a run ({} if none): the
+  overlap with its start derived from the cosines for logs older than that metric."""
+  rows = [r for r in logs.read_log(run.path / logs.METRICS_FILE) if "decoder/change" in r]
+  if not rows:
+    return {}
+  end = dict(rows[-1])
+  cos = [end[f"decoder/cos_{k}"] for k in range(1, run.config.n_synergies + 1)
+         if f"decoder/cos_{k}" in end]
+  if "decoder/overlap_start" not in end and cos:
+    end["decoder/overlap_start"] = float(np.mean(np.square(cos)))
+  return end
+
+
 def first_reward(run: Run, task: str) -> tuple[int, int] | None:
   """(env steps of the task, control steps of each env) until the first non-zero reward of
   `task` in training, or None when none was seen (or the run did not log it)."""
   cfg = run.config
-  for row in _rows(run.path / logs.METRICS_FILE):
+  for row in logs.read_log(run.path / logs.METRICS_FILE):
     t = row.get(f"{task}/first_reward_t")
     if t is not None and t < cfg.unroll_length:
       before = row["step"] - 1  # train steps before the one that saw it
@@ -283,28 +333,73 @@ def curves(runs: list[Run], path: pathlib.Path, title: str, metric: str = "succe
   for ax, task in zip(axes[0], task_names):
     for method in _order({r.method for r in runs if task in r.config.tasks}):
       group = [r for r in runs if r.method == method and task in r.config.tasks and r.evals]
-      if not group:
-        continue
-      steps = sorted({r.per_task_env_steps(row) for r in group for row in r.evals})
-      table = np.full((len(group), len(steps)), np.nan)
-      for i, r in enumerate(group):
-        for row in r.evals:
-          table[i, steps.index(r.per_task_env_steps(row))] = row.get(f"{task}/{metric}", np.nan)
-      mean = np.nanmean(table, axis=0)
-      line, = ax.plot(steps, mean, label=f"{method} [{len(group)}]")
-      if len(group) > 1:
-        ax.fill_between(steps, np.nanmin(table, axis=0), np.nanmax(table, axis=0),
-                        color=line.get_color(), alpha=0.2)
+      if group:
+        _band(ax, method, [[(r.per_task_env_steps(row), row.get(f"{task}/{metric}", np.nan))
+                            for row in r.evals] for r in group])
     ax.set_title(task)
     ax.set_xlabel("env steps of the task")
     ax.set_ylabel(f"evaluation {metric}")
     ax.grid(alpha=0.3)
+  return _save(fig, axes, title, path)
+
+
+def _save(fig, axes, title: str, path: pathlib.Path) -> pathlib.Path:
+  """A figure of panels with the legend in the last one, written to `path` and closed."""
+  import matplotlib.pyplot as plt
+
   axes[0][-1].legend(fontsize=7, loc="best")
   fig.suptitle(title)
   fig.tight_layout()
   fig.savefig(path, dpi=90)
   plt.close(fig)
   return path
+
+
+def _band(ax, label: str, series: list[list[tuple[float, float]]]) -> None:
+  """A line of the mean over runs of (x, y) series, and a band spanning the runs."""
+  steps = sorted({x for one in series for x, _ in one})
+  table = np.full((len(series), len(steps)), np.nan)
+  for i, one in enumerate(series):
+    for x, y in one:
+      table[i, steps.index(x)] = y
+  line, = ax.plot(steps, np.nanmean(table, axis=0), label=f"{label} [{len(series)}]")
+  if len(series) > 1:
+    ax.fill_between(steps, np.nanmin(table, axis=0), np.nanmax(table, axis=0),
+                    color=line.get_color(), alpha=0.2)
+
+
+def overlap_curves(runs: list[Run], path: pathlib.Path, title: str) -> pathlib.Path | None:
+  """The decoder's overlap with the planted span and with its own start against env steps
+  of each task, as logged every train step: a line per method (mean over seeds, band)."""
+  import matplotlib
+
+  matplotlib.use("Agg")
+  import matplotlib.pyplot as plt
+
+  from discosyn_jax import diagnostics
+
+  rows = {r.path: [row for row in logs.read_log(r.path / logs.METRICS_FILE) if "decoder/change" in row]
+          for r in runs}
+  titles = {"decoder/overlap_planted": "with the planted span",
+            "decoder/overlap_start": "with its own start"}
+  keys = [k for k in titles if any(k in row for r in runs for row in rows[r.path])]
+  if not keys:
+    return None
+  fig, axes = plt.subplots(1, len(keys), figsize=(5 * len(keys), 3.4), squeeze=False)
+  for ax, key in zip(axes[0], keys):
+    for method in _order({r.method for r in runs}):
+      group = [r for r in runs if r.method == method and any(key in row for row in rows[r.path])]
+      if group:
+        _band(ax, method, [[(r.per_task_env_steps(row), row[key]) for row in rows[r.path]
+                            if key in row] for r in group])
+    b = runs[0].config.n_synergies
+    ax.axhline(diagnostics.chance_overlap(b, b), color="gray", ls=":", label="chance")
+    ax.set_title(f"overlap {titles[key]}")
+    ax.set_xlabel("env steps of the task")
+    ax.set_ylabel("overlap")
+    ax.set_ylim(0, 1.02)
+    ax.grid(alpha=0.3)
+  return _save(fig, axes, title, path)
 
 
 def tsne(run: Run, path: pathlib.Path, episodes: int = 8, points: int = 2000,
@@ -395,6 +490,23 @@ def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = Tr
               "one it started from: relative change, and the cosines of the principal angles "
               "between the two subspaces (1: the same subspace). A frozen decoder shows 0 and 1.",
               "", movement]
+
+  discovered = discovery_table(main)
+  if discovered:
+    lines += ["## Is the synergy space discovered?", "",
+              "Overlap of two synergy subspaces: the mean squared cosine of their principal "
+              "angles, |Q_i^T Q_j|_F^2 / b (1: the same subspace, 0: orthogonal; two random "
+              "b-dim subspaces of the 20 actions: b / 20, the *chance* column). A space the task "
+              "set determines has a high overlap between seeds (learned, seed pairs) however "
+              "low it was between their random starts (initial); a seed that only turned its "
+              "own start keeps a high overlap with it. The planted span: the subspace the "
+              "planted tasks' targets lie in (tasks/planted.py). Cells: mean (min–max) [pairs "
+              "or seeds]; the learned subspaces need the runs' checkpoints.", "", discovered]
+    for task_set in sorted({r.task_set for r in main}):
+      name = f"overlap-{task_set}.png".replace("+", "_")
+      if overlap_curves([r for r in main if r.task_set == task_set], out / name,
+                        f"{task_set}: the decoder's subspace during training"):
+        lines += [f"![overlap {task_set}]({name})", ""]
 
   if with_tsne and any(r.method.startswith("DiscoSyn") for r in main):
     lines += ["## t-SNE of the low-dimensional actions", ""]

@@ -135,15 +135,42 @@ def standardised_input(decoder: dict, mean: np.ndarray, std: np.ndarray) -> dict
   return decoder
 
 
-def decode(fields: dict[str, Any], params: dict, z: np.ndarray) -> np.ndarray:
-  """The decoder's mean at z, for a decoder described by `fields` (ARCHITECTURE)."""
+def _decoder_model(fields: dict[str, Any], params: dict) -> networks.DiscoSyn:
+  """A module around the decoder described by `fields` (ARCHITECTURE) with these params."""
   from discosyn_jax.config import TrainConfig
 
   config = TrainConfig(**architecture(fields))
   action_size = int(np.shape(params["log_std"])[-1])
-  model = networks.build(config, obs_sizes=(1,), action_size=action_size)
+  return networks.build(config, obs_sizes=(1,), action_size=action_size)
+
+
+def decode(fields: dict[str, Any], params: dict, z: np.ndarray) -> np.ndarray:
+  """The decoder's mean at z, for a decoder described by `fields` (ARCHITECTURE)."""
+  model = _decoder_model(fields, params)
   return np.asarray(model.apply({"params": {"synergy_decoder": params}}, jnp.asarray(z),
                                 method=networks.DiscoSyn.decode)[0])
+
+
+def basis(fields: dict[str, Any], params: dict) -> np.ndarray:
+  """The (action_size, b) synergy basis of a decoder (diagnostics.synergy_basis: the linear
+  decoder's W, an MLP decoder's Jacobian at z = 0)."""
+  from discosyn_jax import diagnostics
+
+  model = _decoder_model(fields, params)
+  return np.asarray(diagnostics.synergy_basis(model, {"params": {"synergy_decoder": params}}))
+
+
+def in_subspace_of(learned: dict, start: dict) -> dict:
+  """A linear decoder with the learned one's scale, offset and noise in the subspace of
+  `start`: with the learned basis W = U S V^T (action_size, b) and U0 the left singular
+  vectors of start's, W' = U0 S V^T; bias and log std are the learned ones."""
+  u, s, vt = np.linalg.svd(np.asarray(learned["synergies"]["kernel"], np.float64).T,
+                           full_matrices=False)
+  u0 = np.linalg.svd(np.asarray(start["synergies"]["kernel"], np.float64).T,
+                     full_matrices=False)[0]
+  out = jax.tree.map(lambda x: np.asarray(x, np.float32), learned)
+  out["synergies"]["kernel"] = ((u0 * s) @ vt).T.astype(np.float32)
+  return out
 
 
 def _check_k(k: int, actions: np.ndarray):
@@ -173,18 +200,18 @@ def read(path: str | pathlib.Path) -> tuple[dict[str, Any], dict]:
   if path.is_dir():
     from discosyn_jax import checkpoints, loop
 
-    config, checkpoint = loop.load_run(path)
+    config, _, flat = loop.read_run(path, lambda c: checkpoints.read_arrays(c, _RUN_DECODER))
     if config.decoder == "identity":
       raise ValueError(f"{path} is a full-action run: it has no synergy decoder")
     meta = {k: getattr(config, k) for k in ARCHITECTURE}
-    flat = checkpoints.read_arrays(checkpoint, _RUN_DECODER)
   elif path.is_file():
     try:
       with np.load(path) as data:
         meta = json.loads(str(data["meta"]))
         flat = {k: data[k] for k in data.files if k != "meta"}
-    except (OSError, ValueError, KeyError) as err:
+    except (OSError, ValueError, KeyError, EOFError) as err:
       raise ValueError(f"{path} is not a synergy file ({type(err).__name__}: {err})") from None
+    _check_file(path, meta, flat)
   else:
     raise ValueError(f"decoder source {path} does not exist")
   meta = {**_DEFAULTS, **meta}
@@ -197,6 +224,35 @@ def read(path: str | pathlib.Path) -> tuple[dict[str, Any], dict]:
       node = node.setdefault(part, {})
     node[leaf] = np.asarray(value, np.float32)
   return meta, params
+
+
+def _check_file(path, meta, flat: dict) -> None:
+  """A synergy file holds the decoder its meta describes, every array in its shape: one
+  line naming the first thing that differs (before any run folder is made)."""
+  from discosyn_jax.config import TrainConfig
+
+  fields = {**_DEFAULTS, **meta} if isinstance(meta, dict) else {}
+  missing = [k for k in ARCHITECTURE if k not in fields]
+  if missing:
+    raise ValueError(f"{path} is not a synergy file: its meta has no {missing[0]}")
+  try:
+    config = TrainConfig(**{k: tuple(v) if isinstance(v, list) else v  # JSON has no tuples
+                            for k, v in architecture(fields).items()}).validate()
+  except (TypeError, ValueError) as err:
+    raise ValueError(f"{path} is not a synergy file: {err}") from None
+  # the hand's 20 actuators, unless the file's noise says otherwise (a malformed one: its
+  # shape is then named below)
+  action_size = np.shape(flat["log_std"])[-1] if np.ndim(flat.get("log_std", 0)) else 20
+  model = networks.build(config, obs_sizes=(1,), action_size=action_size)
+  shapes = jax.eval_shape(model.init, jax.random.PRNGKey(0), [jnp.zeros((1, 1))])
+  want = {".".join(str(k.key) for k in keys): tuple(leaf.shape) for keys, leaf in
+          jax.tree_util.tree_flatten_with_path(shapes["params"]["synergy_decoder"])[0]}
+  have = {k: tuple(np.shape(v)) for k, v in flat.items()}
+  for name in sorted(set(want) | set(have)):
+    if want.get(name) != have.get(name):
+      raise ValueError(f"{path} does not hold the {config.decoder} decoder its meta describes: "
+                       f"{name} is {have.get(name, 'absent')} there, {want.get(name, 'absent')} "
+                       f"for that decoder")
 
 
 def load_decoder(path, config) -> dict:
@@ -216,14 +272,17 @@ def load_decoder(path, config) -> dict:
 
 def method_name(meta) -> str:
   """The paper's name of a synergy model: 'PCA4', 'AE6', 'DiscoSyn3-L', 'DiscoSyn4-NL', and
-  'Random3-L' for the control (a decoder frozen at its random initialisation).
+  'Random3-L' for the control (a decoder frozen at its random initialisation), and
+  'DiscoSyn3-L-wd3' for a decoder learned with weight decay 3 (issue 26's tie-breaker).
   `meta` is a synergy file's meta, or anything with the ARCHITECTURE fields (a config)."""
   get = meta.get if isinstance(meta, dict) else lambda k, d=None: getattr(meta, k, d)
   if get("method"):
     return f"{get('method')}{get('n_synergies')}"
   # a config whose decoder is frozen at its own random initialisation: DiscoSyn's control
   kind = "Random" if get("freeze_decoder") and not get("decoder_from") else "DiscoSyn"
-  return f"{kind}{get('n_synergies')}-{'L' if get('decoder') == 'linear' else 'NL'}"
+  name = f"{kind}{get('n_synergies')}-{'L' if get('decoder') == 'linear' else 'NL'}"
+  decay = 0 if get("freeze_decoder") else get("decoder_weight_decay")  # frozen: never applied
+  return f"{name}-wd{decay:g}" if decay else name
 
 
 def frozen_fields(meta: dict[str, Any], path) -> dict[str, Any]:

@@ -15,9 +15,11 @@ import jax
 import mujoco
 
 from discosyn_jax import checks, scene
+from discosyn_jax.config import CONTROL_DT
 from discosyn_jax.physics import PhysicsView
 
 Info = dict[str, Any]
+_CONES = {"pyramidal": mujoco.mjtCone.mjCONE_PYRAMIDAL, "elliptic": mujoco.mjtCone.mjCONE_ELLIPTIC}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -25,16 +27,31 @@ class TaskConfig:
   """What every task has; task families subclass it with their own fields."""
 
   episode_length: int = 100  # control steps of 0.04 s: 4 s
-  n_substeps: int = 10  # physics steps of 0.004 s per control step
+  # The physics of one control step (CONTROL_DT): n_substeps MuJoCo steps of CONTROL_DT /
+  # n_substeps each; the solver settings go to the model's <option>. These defaults are the
+  # "reference" physics; a run's profile may override them (tasks.physics_overrides).
+  n_substeps: int = 10
+  solver_iterations: int = 8
+  ls_iterations: int = 8
+  cone: str = "pyramidal"  # or "elliptic"
+  # False: contacts keep the 0.01 s time constant of their solref at timesteps over 5 ms,
+  # where MuJoCo's refsafe would raise it to 2 x timestep (softer: deeper penetration)
+  refsafe: bool = True
   hand_noise: float = 0.05  # rad, uniform noise on the initial hand joint angles
 
   def __post_init__(self):
     # every task's config (and every override of one): types, finite numbers, then ranges;
     # the task classes check their own fields' ranges
     checks.fields(self)
-    for name in ("episode_length", "n_substeps"):
+    for name in ("episode_length", "n_substeps", "solver_iterations", "ls_iterations"):
       if getattr(self, name) < 1:
         raise ValueError(f"{name} must be at least 1, not {getattr(self, name)}")
+    if self.cone not in _CONES:
+      raise ValueError(f"cone must be one of {', '.join(_CONES)}, not {self.cone!r}")
+
+  @property
+  def timestep(self) -> float:
+    return CONTROL_DT / self.n_substeps
     if self.hand_noise < 0:
       raise ValueError(f"hand_noise must not be negative, not {self.hand_noise}")
 
@@ -47,9 +64,14 @@ class Task(abc.ABC):
 
   def build_model(self) -> mujoco.MjModel:
     spec = scene.load_spec(self.scene)
+    option, config = spec.option, self.config
+    option.timestep, option.iterations = config.timestep, config.solver_iterations
+    option.ls_iterations, option.cone = config.ls_iterations, _CONES[config.cone]
+    if not config.refsafe:
+      option.disableflags |= mujoco.mjtDisableBit.mjDSBL_REFSAFE
     self.edit_spec(spec)
     model = spec.compile()
-    self.dt = float(model.opt.timestep) * self.config.n_substeps  # one control step, s
+    self.dt = CONTROL_DT
     self.bind(model)
     return model
 

@@ -48,7 +48,8 @@ class TrainState:
 def make_envs(config: TrainConfig) -> list[Env]:
   import tasks
 
-  return [tasks.make(name, backend=config.backend) for name in config.tasks]
+  return [tasks.make(name, backend=config.backend, physics=config.physics)
+          for name in config.tasks]
 
 
 class Trainer:
@@ -72,12 +73,16 @@ class Trainer:
     self.obs_sizes = tuple(env.observation_size for env in self.envs)
     self.model = networks.build(config, self.obs_sizes, self.action_size)
     self.optimizer = ppo.optimizer(config)
-    self._train = [wrappers.for_training(env) for env in self.envs]
+    self._train = [wrappers.for_training(env, config.reset_pool) for env in self.envs]
     self._eval = [wrappers.for_evaluation(env) for env in self.envs]
     self._fresh_state = jax.jit(self._initial_state)
     self._fresh_params = jax.jit(self._init_params)
+    # the span the tasks plant, if they do (tasks/planted.py): what the decoder should find
+    self.planted_span = diagnostics.union_span(
+        [env.planted_span for env in self.envs if getattr(env, "planted_span", None) is not None])
     # the decoder's movement from a reference (diagnostics.py); None without a decoder
-    self.decoder_drift = (jax.jit(functools.partial(diagnostics.decoder_drift, self.model))
+    self.decoder_drift = (jax.jit(functools.partial(diagnostics.decoder_drift, self.model,
+                                                    planted=self.planted_span))
                           if self.model.has_discriminator else None)
     self.train_step = jax.jit(self._train_step, donate_argnums=0)
     self.evaluate = jax.jit(self._evaluate)
@@ -100,9 +105,7 @@ class Trainer:
     return params if decoder_params is None else _with_decoder(params, decoder_params)
 
   def _split(self, key):
-    """(the state's rng, the parameters' key, a reset key per task): what `init` draws."""
-    key, init_key, *env_keys = jax.random.split(key, 2 + len(self.envs))
-    return key, init_key, env_keys
+    return split_seed_key(key, len(self.envs))
 
   def _init_params(self, key):
     return self.model.init(key, [jnp.zeros((1, s)) for s in self.obs_sizes])
@@ -305,6 +308,23 @@ class Trainer:
     return {name: jax.device_get(self.episodes(params, normalizers, keys[n], task=n,
                                                episodes=episodes)[0])
             for n, name in enumerate(self.config.tasks)}
+
+
+def split_seed_key(key, n_tasks: int):
+  """(the state's rng, the parameters' key, a reset key per task): what `Trainer.init` draws
+  from the key of its seed."""
+  key, init_key, *env_keys = jax.random.split(key, 2 + n_tasks)
+  return key, init_key, env_keys
+
+
+def initial_decoder(config: TrainConfig, action_size: int):
+  """The random decoder parameters a run of `config` starts from, without building its envs:
+  the decoder's initialisation draws from its own path in the module, whatever the
+  observation sizes of the heads (tests/test_discovery.py checks it)."""
+  model = networks.build(config, (1,) * len(config.tasks), action_size)
+  _, init_key, _ = split_seed_key(jax.random.PRNGKey(config.seed), len(config.tasks))
+  params = model.init(init_key, [jnp.zeros((1, 1))] * len(config.tasks))
+  return params["params"]["synergy_decoder"]
 
 
 def gae(reward, value, bootstrap, done, truncation, config: TrainConfig):

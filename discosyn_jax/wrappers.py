@@ -23,12 +23,22 @@ class FreshResetWrapper(Wrapper):
 
   The returned state keeps the finished step's reward, done and metrics (they describe
   the transition) but holds the new episode's physics state and observation.
+
+  With `pool`, a finished env restarts instead from one of B initial states made once at
+  reset (B: the batch), drawn at random per episode: the step then holds no env reset,
+  which on MJX is an `mjx.forward` per task for XLA to compile into the train step.
   """
+
+  def __init__(self, env: Env, pool: bool = False):
+    super().__init__(env)
+    self.pool = pool
 
   def reset(self, rng: jax.Array) -> State:
     keys = jax.vmap(jax.random.split)(rng)  # (B, 2, 2): one to reset now, one to keep
     state = self.env.reset(keys[:, 0])
     state.info["reset_key"] = keys[:, 1]
+    if self.pool:
+      state.info["reset_pool"] = self.env.reset(jax.vmap(jax.random.fold_in, (0, None))(keys[:, 1], 1))
     return state
 
   def step(self, state: State, action: jax.Array) -> State:
@@ -36,16 +46,26 @@ class FreshResetWrapper(Wrapper):
     state = self.env.step(state.replace(done=jnp.zeros_like(state.done)), action)
     return jax.lax.cond(state.done.any(), self._reset_done, lambda s: s, state)
 
+  def _fresh(self, state: State, keys: jax.Array) -> State:
+    if not self.pool:
+      return self.env.reset(keys)
+    pool = state.info["reset_pool"]
+    # rows of this device's share of the pool (under shard_map the batch is split)
+    rows = jax.tree.leaves(pool)[0].shape[0]
+    pick = jax.vmap(lambda k: jax.random.randint(k, (), 0, rows))(keys)
+    return jax.tree.map(lambda x: x[pick], pool)
+
   def _reset_done(self, state: State) -> State:
     keys = jax.vmap(jax.random.split)(state.info["reset_key"])
-    fresh = self.env.reset(keys[:, 0])
+    fresh = self._fresh(state, keys[:, 0])
     done = state.done > 0
 
     def where_done(new, old):
       mask = jnp.reshape(done, done.shape + (1,) * (old.ndim - done.ndim))
       return jnp.where(mask, new, old)
 
-    info = {k: (v if k in _KEEP_ON_RESET else jax.tree.map(where_done, fresh.info[k], v))
+    info = {k: (v if k in _KEEP_ON_RESET + ("reset_pool",) else
+                jax.tree.map(where_done, fresh.info[k], v))
             for k, v in state.info.items() if k != "reset_key"}
     info["reset_key"] = where_done(keys[:, 1], state.info["reset_key"])
     return state.replace(
@@ -53,10 +73,11 @@ class FreshResetWrapper(Wrapper):
         obs=where_done(fresh.obs, state.obs), info=info)
 
 
-def for_training(env: Env) -> Env:
+def for_training(env: Env, reset_pool: bool = False) -> Env:
   """Batched (reset takes keys of shape (B, 2)), time-limited at `env.episode_length`,
-  auto-resetting with fresh initial states."""
-  return FreshResetWrapper(VmapWrapper(EpisodeWrapper(env, env.episode_length, action_repeat=1)))
+  auto-resetting with fresh initial states (or from a pool of them: FreshResetWrapper)."""
+  return FreshResetWrapper(VmapWrapper(EpisodeWrapper(env, env.episode_length, action_repeat=1)),
+                           pool=reset_pool)
 
 
 def for_evaluation(env: Env) -> Env:

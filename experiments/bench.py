@@ -210,9 +210,9 @@ def bench_row(config, args) -> dict:
 
 
 def _envs(config):
-  import tasks
+  from discosyn_jax.train import make_envs
 
-  return [tasks.make(name, backend=config.backend) for name in config.tasks]
+  return make_envs(config)
 
 
 def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.ArgumentParser:
@@ -226,6 +226,10 @@ def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.Argu
   parser.add_argument("--batches", type=int, nargs="+",
                       help="envs per task, a row each (default: the preset's num_envs)")
   parser.add_argument("--epochs", type=int, help="PPO epochs (default: the preset's)")
+  parser.add_argument("--physics", nargs="+", choices=["fast", "reference"],
+                      help="the tasks' physics profiles, a row each (default: the preset's)")
+  parser.add_argument("--reset-pool", action="store_true",
+                      help="episodes restart from a pool of initial states (TrainConfig.reset_pool)")
   parser.add_argument("--steps", type=int, default=3,
                       help="train steps per timing (default: %(default)s)")
   parser.add_argument("--repeats", type=int, default=3,
@@ -249,11 +253,14 @@ def run(args) -> None:
     base = base.replace(tasks=tuple(tasks.expand(args.tasks)))
   if args.epochs is not None:
     base = base.replace(update_epochs=args.epochs)
+  if args.reset_pool:
+    base = base.replace(reset_pool=True)
   for name in ("steps", "repeats"):
     if getattr(args, name) < 1:
       raise ValueError(f"--{name} must be at least 1, not {getattr(args, name)}")
-  configs = [base.replace(backend=backend, num_envs=batch).validate()
-             for backend in args.backends for batch in (args.batches or [base.num_envs])]
+  configs = [base.replace(backend=backend, num_envs=batch, physics=physics).validate()
+             for backend in args.backends for batch in (args.batches or [base.num_envs])
+             for physics in (args.physics or [base.physics])]
   c = configs[0]
   print(f"# {platform.node()}: {os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}; "
         f"jax {jax.__version__} on {jax.device_count()} x {jax.devices()[0].device_kind}, "
@@ -261,17 +268,17 @@ def run(args) -> None:
   print(f"# preset {args.preset}: {len(c.tasks)} tasks x envs x {c.unroll_length} steps per "
         f"train step; {c.update_epochs} epochs x {c.num_minibatches} minibatches; decoder "
         f"{c.decoder}, b = {c.n_synergies}; ratios: median (min-max) of {args.repeats} repeats")
-  print("| backend | batch | rollout env/s | physics env/s | physics/rollout | train env/s | "
+  print("| backend | batch | physics | rollout env/s | physics env/s | physics/rollout | train env/s | "
         "train/rollout | callback share | update s (share) | compile s (train, physics) | "
         "peak mem GiB |")
-  print("|---|---|---|---|---|---|---|---|---|---|---|")
+  print("|---|---|---|---|---|---|---|---|---|---|---|---|")
   for config in configs:
     r = bench_row(config, args)
     train = (f"{r['train']:,.0f} | {r['train_ratio']} | {r['callback']:.0%} | "
              f"{r['update']:.3f} ({r['update_share']:.0%}) | "
              f"{r['compile']:.1f}, {r['physics_compile']:.1f}" if args.train
              else f"- | - | - | - | -, {r['physics_compile']:.1f}")
-    print(f"| {r['backend']} | {r['batch']} | {r['rollout']:,.0f} | {r['physics']:,.0f} | "
+    print(f"| {r['backend']} | {r['batch']} | {config.physics} | {r['rollout']:,.0f} | {r['physics']:,.0f} | "
           f"{r['physics_ratio']} | {train} | {r['peak']:.2f} |", flush=True)
 
 

@@ -46,8 +46,8 @@ def summary(out: pathlib.Path) -> str:
            "|---|---|---|---|---|---|---|---|---|"]
   for run in sorted(p for p in out.iterdir() if (p / loop.CONFIG_FILE).is_file()):
     config = config_lib.load(run / loop.CONFIG_FILE)
-    evals = logs.read_jsonl(run / logs.EVAL_FILE) if (run / logs.EVAL_FILE).is_file() else []
-    metrics = logs.read_jsonl(run / logs.METRICS_FILE) if (run / logs.METRICS_FILE).is_file() else []
+    evals = logs.read_log(run / logs.EVAL_FILE)
+    metrics = logs.read_log(run / logs.METRICS_FILE)
     if not evals:
       continue
     final = evals[-1]

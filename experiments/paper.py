@@ -1,8 +1,14 @@
 """The paper's experiments as plans of steps, each at a scale: `discosyn experiment NAME`.
 
   discosyn-set1 / -set2  DiscoSyn<b>-L and -NL (Tables I and II), each followed by its
-                         control Random<b>-L / -NL: the same run with the decoder frozen
-                         at its random initialisation (what the learned decoder must beat)
+                         controls (what the learned decoder must beat): Random<b>-L / -NL,
+                         the same run with the decoder frozen at its random initialisation;
+                         Random<b>-L-zfree / -NL-zfree, the same with z free (not squashed);
+                         Random<b>-L-matched, the random subspace of that start carrying the
+                         learned decoder's singular values, bias and noise (isolates the
+                         subspace from its scale and offset; read from the DiscoSyn run)
+  discosyn-planted /     the same on the planted-synergy test bed (tasks/planted.py, b = 3):
+    -planted_slack       one adequate subspace / many; not part of `all`
   baselines-set1 / -set2 the sequential baseline: independent full-action PPO per task (one
                          run, one head and one value net per task, no shared parameters),
                          its deterministic actions collected, PCA and an autoencoder fitted
@@ -37,8 +43,9 @@ from experiments import presets
 
 TASK_SETS = {"set1": presets.SET1, "set2": presets.SET2,
              "unseen-set1": ("valve_cylinder", "valve_cw"), "unseen-set2": ("screw_topdown",),
-             "sparse": ("valve_goal",)}
-DISCOSYN_SIZES = {"set1": (3, 4), "set2": (4, 6)}
+             "sparse": ("valve_goal",), "planted": presets.PLANTED,
+             "planted_slack": presets.PLANTED_SLACK}
+DISCOSYN_SIZES = {"set1": (3, 4), "set2": (4, 6), "planted": (3,), "planted_slack": (3,)}
 BASELINES = (("PCA", 4), ("AE", 4), ("PCA", 6), ("AE", 6))  # trained in, as in the paper
 FITTED_SIZES = (3, 4, 6)  # explained variance reported for these
 TRANSFER_FROM = {"unseen-set1": ("set1", 3, "linear"), "unseen-set2": ("set2", 6, "linear"),
@@ -64,9 +71,10 @@ SCALES = {
     "cpu": Scale(dict(num_envs=64, unroll_length=20, num_minibatches=4, update_epochs=4,
                       steps=300, eval_every=50, eval_envs=32, checkpoint_every=100), 32, 3000,
                  (0, 1, 2)),
-    # one GPU: 2048 envs per task, 98 M env steps for a four-task run
+    # one GPU: 2048 envs per task, 98 M env steps for a four-task run; episodes restart from
+    # a pool of initial states, so the train step compiles no mjx.forward (BENCHMARKS.md)
     "gpu": Scale(dict(num_envs=2048, unroll_length=20, num_minibatches=16, update_epochs=4,
-                      steps=600, eval_every=25, eval_envs=256, checkpoint_every=100), 256, 20000,
+                      reset_pool=True, steps=600, eval_every=25, eval_envs=256, checkpoint_every=100), 256, 20000,
                  (0, 1, 2)),
 }
 
@@ -142,6 +150,33 @@ def fitted_meta(method: str, k: int, hidden: tuple[int, ...]) -> dict[str, Any]:
               decoder_hidden=hidden, method=method)
 
 
+@dataclasses.dataclass
+class Match:
+  """Write the decoder of a `-matched` control: the random initial subspace of a linear
+  DiscoSyn run's seed carrying that run's learned singular values, bias and noise."""
+  name: str  # the folder of the synergy file in OUT
+  source: str  # the DiscoSyn run's folder in OUT
+  meta: dict[str, Any]
+  FILE = "decoder.npz"
+
+  @property
+  def needs(self) -> tuple[str, ...]:
+    return (self.source,)
+
+  def done(self, out: pathlib.Path) -> bool:
+    return (out / self.name / self.FILE).is_file()
+
+  def run(self, out: pathlib.Path, make_trainer, progress: bool, log) -> None:
+    from discosyn_jax import train
+
+    config = loop.load_run(out / self.source)[0]
+    meta, learned = synergies.read(out / self.source)
+    start = train.initial_decoder(config, int(np.shape(learned["log_std"])[-1]))
+    synergies.save(out / self.name / self.FILE, synergies.in_subspace_of(learned, start),
+                   meta, source=self.source)
+    log(f"{self.name}: the learned decoder of {self.source} in its random initial subspace")
+
+
 # -- plans ---------------------------------------------------------------------
 def _meta(experiment, method, task_set, seed, scale):
   return dict(experiment=experiment, method=method, set=task_set, seed=seed, scale=scale)
@@ -181,6 +216,25 @@ class Planner:
     name = (f"{experiment}-random-seed{self.seed}" if label == experiment
             else self._folder(method, task_set))
     return Train(name, config, _meta(experiment, method, task_set, self.seed, self.scale))
+
+  def controls(self, learned: Train, task_set: str, experiment: str) -> list:
+    """A DiscoSyn run's controls (module docstring): Random, Random-zfree where the run
+    bounds z, and for a linear decoder Random-matched with the step that writes its decoder."""
+    random = self.random_decoder(learned, task_set, experiment)
+    steps = [random]
+    meta = lambda method: _meta(experiment, method, task_set, self.seed, self.scale)
+    if learned.config.squash_z:
+      method = f"{random.meta['method']}-zfree"
+      steps.append(Train(self._folder(method, task_set),
+                         random.config.replace(squash_z=False).validate(), meta(method)))
+    if learned.config.decoder == "linear":
+      method = f"{random.meta['method']}-matched"
+      match = Match(self._folder(f"{method}-decoder", task_set), learned.name, meta("fit"))
+      path = (self.out / match.name / Match.FILE).resolve()
+      steps += [match, Train(self._folder(method, task_set),
+                             random.config.replace(decoder_from=str(path)).validate(),
+                             meta(method), needs=(match.name,))]
+    return steps
 
   def ppo(self, task_set: str, experiment: str) -> Train:
     base = presets.preset("set1-ppo")  # the same PPO settings for every set
@@ -241,8 +295,7 @@ class Planner:
       task_set = experiment[9:]
       runs = [self.discosyn(task_set, b, kind) for b in DISCOSYN_SIZES[task_set]
               for kind in ("linear", "mlp")]
-      return [step for run in runs
-              for step in (run, self.random_decoder(run, task_set, experiment))]
+      return [step for run in runs for step in (run, *self.controls(run, task_set, experiment))]
     if experiment.startswith("baselines-") and experiment[10:] in DISCOSYN_SIZES:
       return self.baselines(experiment[10:])
     if experiment == "transfer":
@@ -254,7 +307,7 @@ class Planner:
 
 
 EXPERIMENTS = ("discosyn-set1", "discosyn-set2", "baselines-set1", "baselines-set2", "transfer",
-               "sparse", "all")
+               "sparse", "all", "discosyn-planted", "discosyn-planted_slack")
 
 
 def select(steps: list, methods) -> list:

@@ -11,10 +11,16 @@ from discosyn_jax.config import TrainConfig
 
 SET1 = ("valve0", "valve1", "valve2", "valve3")
 SET2 = ("dice", "valve3", "weight_pull", "screw")
+# the planted-synergy test bed (tasks/planted.py), as tasks.TASK_SETS names them
+PLANTED = tuple(f"planted{n}" for n in range(4))
+PLANTED_SLACK = tuple(f"planted_slack{n}" for n in range(4))
 
 # the size of a run on a CPU: a run of set1-disco3-linear took 55 min for 10 M env steps on 2 cores
 CPU_RUN = dict(num_envs=128, unroll_length=20, num_minibatches=8, update_epochs=4, steps=2000,
                eval_every=50, eval_envs=64, checkpoint_every=100)
+# the test bed: pure JAX, 2.05 M env steps of four tasks in 2-3 min on 2 busy cores (2026-12-02)
+PLANTED_RUN = dict(num_envs=64, unroll_length=20, num_minibatches=4, update_epochs=4, steps=400,
+                   eval_every=25, eval_envs=64, checkpoint_every=100)
 # full-action PPO: no discriminator, no decoder noise, a smaller initial std on 20 dims
 PPO = dict(decoder="identity", n_synergies=20, alpha2=0.0, alpha3=0.0, init_z_std=0.5)
 
@@ -39,6 +45,12 @@ for _set, _tasks, _sizes in (("set1", SET1, (3, 4)), ("set2", SET2, (4, 6))):
       # random decoder did as well (issue 13, docs/TRAINING_NOTES.md)
       PRESETS[f"{_set}-disco{_b}-{_kind}"] = TrainConfig(tasks=_tasks, n_synergies=_b,
                                                         decoder=_kind, squash_z=True, **CPU_RUN)
+
+# DiscoSyn3 on the planted test bed: (a) one adequate subspace, (b) many (issue 26)
+for _set, _tasks in (("planted", PLANTED), ("planted_slack", PLANTED_SLACK)):
+  for _kind in ("linear", "mlp"):
+    PRESETS[f"{_set}-disco3-{_kind}"] = TrainConfig(tasks=_tasks, n_synergies=3, decoder=_kind,
+                                                   squash_z=True, **PLANTED_RUN)
 
 
 def preset(name: str) -> TrainConfig:

@@ -10,11 +10,14 @@
 FAULT_STARVE_AFTER=N (both modes): after the N-th checkpoint this process writes, the disk
 is full: a file fills the small tmpfs the run is on (FAULT_FILL names it), or else, where no
 tmpfs could be mounted, the disk reports no free space to the checkpoints.
+FAULT_READ_ONLY=FOLDER: instead, FOLDER becomes a read-only mount (a bind mount of itself,
+in the mount namespace the test made).
 """
 
 import os
 import pathlib
 import shutil
+import subprocess
 import sys
 import types
 
@@ -55,6 +58,11 @@ def small_state(step: int) -> Small:
 
 
 def starve() -> None:
+  read_only = os.environ.get("FAULT_READ_ONLY")
+  if read_only:
+    for options in (["--bind"], ["-o", "remount,bind,ro"]):
+      subprocess.run(["mount", *options, read_only, read_only], check=True)
+    return
   fill = os.environ.get("FAULT_FILL")
   if not fill:  # no tmpfs to fill: the disk says it is full
     shutil.disk_usage = lambda path: types.SimpleNamespace(total=2**30, used=2**30, free=0)

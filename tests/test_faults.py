@@ -16,6 +16,8 @@ import pathlib
 import random
 import select
 import shutil
+import signal
+import socket
 import subprocess
 import sys
 import threading
@@ -27,7 +29,8 @@ import numpy as np
 import pytest
 
 import tasks
-from discosyn_jax import atomic, checkpoints, cli, logs, loop, train, videos
+from discosyn_jax import atomic, checkpoints, cli, logs, loop, report, runs, train, videos
+from discosyn_jax import config as config_lib
 from discosyn_jax.train import Trainer
 from tests.fault_worker import TOY, small_state, toy_envs
 from tests.helpers import tensorboard_scalars
@@ -44,10 +47,25 @@ def quiet(*_):
   pass
 
 
+_WORKERS = []  # the worker processes a test started: none outlives it (_no_worker_left)
+
+
 def worker(*args, env=None, **popen):
-  return subprocess.Popen([sys.executable, "-u", "-m", "tests.fault_worker", *map(str, args)],
+  proc = subprocess.Popen([sys.executable, "-u", "-m", "tests.fault_worker", *map(str, args)],
                           cwd=REPO, env={**os.environ, **(env or {})}, text=True,
                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, **popen)
+  _WORKERS.append(proc)
+  return proc
+
+
+@pytest.fixture(autouse=True)
+def _no_worker_left():
+  yield
+  while _WORKERS:
+    proc = _WORKERS.pop()
+    if proc.poll() is None:  # a test that failed before it ended its worker
+      proc.kill()
+      proc.communicate()
 
 
 def good(run_dir) -> list[int]:
@@ -217,6 +235,36 @@ def test_a_damaged_checkpoint_is_named_once_and_the_previous_good_one_used(saved
   assert checkpoints.latest(run_dir, warn=quiet) is None
 
 
+def test_a_checkpoint_without_its_manifest_or_with_files_it_does_not_list_is_damaged(saved_run,
+                                                                                      tmp_path):
+  run_dir = tmp_path / "run"
+  shutil.copytree(saved_run, run_dir)
+  (run_dir / "final" / checkpoints.MANIFEST).unlink()  # no longer a way to skip the checks
+  (run_dir / "checkpoints" / "2" / "extra").write_bytes(b"never checked")
+  warnings = []
+  assert checkpoints.latest(run_dir, warn=warnings.append) == run_dir / "checkpoints" / "1"
+  assert warnings == [
+      f"checkpoint {run_dir / 'final'} is damaged: it has no manifest.json (only checkpoints "
+      f"written before {checkpoints.MANIFESTS_SINCE} may lack one); skipping it",
+      f"checkpoint {run_dir / 'checkpoints' / '2'} is damaged: extra is not in its "
+      f"manifest.json; skipping it"]
+
+
+def test_a_checkpoint_of_the_release_before_manifests_is_still_read(tmp_path):
+  """As that release wrote it: orbax's CheckpointManager layout (the item in default/), no
+  manifest, committed before manifests came in."""
+  import orbax.checkpoint as ocp
+
+  item = tmp_path / "run" / "checkpoints" / "3" / "default"
+  with ocp.StandardCheckpointer() as checkpointer:
+    checkpointer.save(item, checkpoints._arrays(small_state(3)), custom_metadata={"step": 3})
+    checkpointer.wait_until_finished()
+  meta = json.loads((item / "_CHECKPOINT_METADATA").read_text())
+  meta["commit_timestamp_nsecs"] = checkpoints.MANIFESTS_SINCE_NS - 86400 * 10**9
+  (item / "_CHECKPOINT_METADATA").write_text(json.dumps(meta))
+  assert good(tmp_path / "run") == [3]
+
+
 # -- runs: kills, damage and full disks in the middle of training ------------------
 
 def run_logs(run_dir: pathlib.Path) -> dict:
@@ -327,9 +375,11 @@ def small_disk():
   return ok
 
 
-def _run_on_small_disk(small_disk, tmp_path, args, starve_after: int):
+def _run_on_small_disk(small_disk, tmp_path, args, starve_after: int, read_only: str = ""):
   """Run the worker with its run folder RUN on a disk that fills after `starve_after`
-  checkpoints; return (exit status, stderr, a copy of RUN as the worker left it)."""
+  checkpoints (or where the folder RUN/`read_only` becomes a read-only mount then); return
+  (exit status, stderr, a copy of RUN as the worker left it). A worker that does not end
+  within two minutes fails the test."""
   copy = tmp_path / "run"
   env = {"FAULT_STARVE_AFTER": str(starve_after)}
   command = [sys.executable, "-u", "-m", "tests.fault_worker", *args]
@@ -337,6 +387,8 @@ def _run_on_small_disk(small_disk, tmp_path, args, starve_after: int):
     disk = tmp_path / "disk"
     disk.mkdir()
     env["FAULT_FILL"] = str(disk)
+    if read_only:
+      env["FAULT_READ_ONLY"] = str(disk / "run" / read_only)
     script = ('mount -t tmpfs -o size=4m none "$DISK" && "$@"; status=$?; rm -f "$DISK/ballast"; '
               'cp -a "$DISK/run" "$COPY"; exit $status')
     command = ["unshare", "-r", "-m", "sh", "-c", script, "sh",
@@ -344,8 +396,16 @@ def _run_on_small_disk(small_disk, tmp_path, args, starve_after: int):
     env.update(DISK=str(disk), COPY=str(copy))
   else:
     command = [str(a).replace("RUN", str(copy)) for a in command]
-  proc = subprocess.run(command, cwd=REPO, env={**os.environ, **env}, capture_output=True, text=True)
-  return proc.returncode, proc.stderr, copy
+  # a session of its own: a worker that hangs is killed with the shell that started it
+  proc = subprocess.Popen(command, cwd=REPO, env={**os.environ, **env}, text=True,
+                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+  try:
+    _, err = proc.communicate(timeout=120)
+  except subprocess.TimeoutExpired:
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.communicate()
+    pytest.fail("the worker did not end within 120 s")
+  return proc.returncode, err, copy
 
 
 def test_a_full_disk_fails_a_save_in_one_line_and_keeps_the_checkpoints_before(small_disk, tmp_path):
@@ -365,6 +425,157 @@ def test_a_full_disk_mid_run_stops_it_in_one_line_naming_the_last_good_checkpoin
   assert line.endswith(str(pathlib.Path("run", "checkpoints", "2")))
   assert "No space left on device" in line
   assert status == 2 and good_checkpoints_of(run_dir) == [2]
+
+
+# -- one writer, Ctrl-C and SIGTERM, --force -------------------------------------------
+
+def _wait_for(condition, proc, timeout: float = 120.0) -> None:
+  """Wait until condition() holds while `proc` runs; fail with its stderr when it ends or
+  the time is up (never a hang)."""
+  end = time.monotonic() + timeout
+  while not condition():
+    if proc.poll() is not None or time.monotonic() > end:
+      proc.kill()
+      _, err = proc.communicate()
+      pytest.fail(f"the worker ended or took over {timeout:.0f} s; stderr: {err[-2000:]}")
+    time.sleep(0.05)
+
+
+def _ended(proc, timeout: float = 60.0) -> tuple[int, str]:
+  """(exit status, stderr) of a worker that must end by itself within `timeout` seconds."""
+  try:
+    _, err = proc.communicate(timeout=timeout)
+  except subprocess.TimeoutExpired:
+    proc.kill()
+    _, err = proc.communicate()
+    pytest.fail(f"the worker did not end in {timeout:.0f} s; stderr: {err[-2000:]}")
+  return proc.returncode, err
+
+
+def _long_run(run_dir, *flags):
+  """A worker training the toy task in `run_dir` for far longer than any test waits."""
+  return worker("train", "--out", run_dir, "--no-progress", "--steps", "100000", *flags)
+
+
+def _periodic_steps(run_dir) -> list[int]:
+  folder = run_dir / "checkpoints"
+  return [int(p.name) for p in folder.glob("*") if p.name.isdigit()] if folder.is_dir() else []
+
+
+def _snapshot(folder) -> dict[str, bytes]:
+  return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(pathlib.Path(folder).rglob("*"))
+          if p.is_file()}
+
+
+def test_a_run_has_one_writer_readers_see_a_consistent_checkpoint_and_a_dead_writer_is_replaced(
+    tmp_path, capsys, toy_tasks):
+  run_dir = tmp_path / "run"
+  # a checkpoint every step, one kept: the checkpoints rotate all the time
+  proc = _long_run(run_dir, "--checkpoint-every", "1", "--eval-every", "0")
+  _wait_for(lambda: checkpoints.candidates(run_dir), proc)
+  holder = f"{run_dir} is being written by process {proc.pid} on {socket.gethostname()}, started "
+  before = {"config.json": (run_dir / "config.json").read_bytes()}
+  for flags in (["--resume"], ["--force"], []):  # a second writer, whatever it asks
+    assert cli.main(["train", "--out", str(run_dir), *flags]) == 2
+    one_error_line(capsys, holder)
+  assert (run_dir / "config.json").read_bytes() == before["config.json"]
+  for _ in range(40):  # readers: never a damaged or vanished checkpoint, and one line
+    warnings = []
+    loop.read_run(run_dir, checkpoints.verify, warn=warnings.append)
+    assert len(warnings) == 1 and warnings[0].startswith(holder), warnings
+  assert cli.main(["eval", str(run_dir)]) == 0
+  (line,) = capsys.readouterr().err.splitlines()
+  assert line.startswith(f"discosyn: warning: {holder}") and ": read its checkpoint " in line
+  assert not report.load_run(run_dir).finished
+  (line,) = capsys.readouterr().err.splitlines()
+  assert line.startswith(f"discosyn: warning: {holder}") and "read its logs as they are now" in line
+  proc.kill()  # no chance to release the lock
+  _ended(proc)
+  steps = [row["step"] for row in logs.read_jsonl(run_dir / logs.METRICS_FILE)]
+  assert steps == list(range(1, len(steps) + 1))  # one writer: no interleaved steps
+  resumed_at = good_checkpoints_of(run_dir)[0]
+  assert cli.main(["train", "--out", str(run_dir), "--resume", "--steps", str(resumed_at + 1),
+                   "--no-progress"]) == 0
+  err = capsys.readouterr().err.splitlines()
+  assert err == [f"discosyn: warning: {run_dir} was left by process {proc.pid} on "
+                 f"{socket.gethostname()}, started {err[0].split(', started ')[1]}"]
+  assert "which has ended without finishing; this process takes it over" in err[0]
+  assert not (run_dir / runs.LOCK).exists()
+
+
+@pytest.mark.parametrize("signum, status, name", [(signal.SIGINT, 130, "Ctrl-C"),
+                                                  (signal.SIGTERM, 143, "SIGTERM")])
+def test_ctrl_c_and_sigterm_end_a_run_in_one_line_that_says_where_it_resumes(tmp_path, signum,
+                                                                             status, name):
+  run_dir = tmp_path / "run"
+  proc = _long_run(run_dir)
+  _wait_for(lambda: max(_periodic_steps(run_dir), default=0) >= 4, proc)
+  proc.send_signal(signum)
+  code, err = _ended(proc)
+  line = err.strip()
+  assert code == status and len(err.strip().splitlines()) == 1, err
+  assert line.startswith(f"discosyn: stopped by {name}: training stopped at step "), line
+  resume_from = pathlib.Path(line.split("; it resumes from ")[1].split(": ")[0])
+  assert line.endswith(f": discosyn train --out {run_dir} --resume")
+  assert resume_from.parent.parent == run_dir and checkpoints.verify(resume_from) >= 4
+  assert not (run_dir / runs.LOCK).exists()
+
+
+def test_ctrl_c_before_the_first_checkpoint_of_a_new_run_leaves_nothing(tmp_path):
+  run_dir = tmp_path / "deep" / "run"
+  proc = _long_run(run_dir, "--checkpoint-every", "100000")
+  _wait_for(lambda: (run_dir / logs.METRICS_FILE).is_file(), proc)
+  proc.send_signal(signal.SIGINT)
+  code, err = _ended(proc)
+  assert code == 130 and len(err.strip().splitlines()) == 1, err
+  assert err.strip().endswith("the new run made no checkpoint and was removed")
+  assert list(tmp_path.iterdir()) == []
+
+
+def test_force_refuses_a_folder_that_is_not_a_run(tmp_path, capsys, toy_tasks):
+  folder = tmp_path / "mine"
+  folder.mkdir()
+  (folder / "config.json").write_text("{}")  # anyone's config.json, beside a user's files
+  (folder / "notes.txt").write_text("mine")
+  before = _snapshot(folder)
+  assert cli.main(["train", "--out", str(folder), "--force"]) == 2
+  one_error_line(capsys, f"{folder} holds a config.json but no run of discosyn",
+                 "--force replaces only a run")
+  assert _snapshot(folder) == before
+
+
+def test_force_keeps_the_old_run_whole_until_the_new_one_has_a_checkpoint(unbroken, tmp_path,
+                                                                          capsys, toy_tasks):
+  run_dir = tmp_path / "run"
+  shutil.copytree(unbroken[0], run_dir)
+  (run_dir / "videos").mkdir()  # what a user added to the run, e.g. `discosyn render`
+  (run_dir / "videos" / "valve1.mp4").write_bytes(b"a video")
+  old = _snapshot(run_dir)
+  # Ctrl-C before the new run's first checkpoint: the process puts the old run back
+  proc = _long_run(run_dir, "--force", "--checkpoint-every", "100000")
+  _wait_for(lambda: (run_dir / logs.METRICS_FILE).is_file()
+            and (run_dir / runs.ASIDE).is_dir(), proc)
+  proc.send_signal(signal.SIGINT)
+  code, err = _ended(proc)
+  assert code == 130 and err.strip().endswith("the run it was to replace is back as it was"), err
+  assert _snapshot(run_dir) == old
+  # a kill there: the next writer puts it back
+  proc = _long_run(run_dir, "--force", "--checkpoint-every", "100000")
+  _wait_for(lambda: (run_dir / logs.METRICS_FILE).is_file()
+            and (run_dir / runs.ASIDE).is_dir(), proc)
+  proc.kill()
+  _ended(proc)
+  assert _snapshot(run_dir / runs.ASIDE) == old
+  assert cli.main(["train", "--out", str(run_dir), "--resume", "--no-progress"]) == 0
+  err = capsys.readouterr().err
+  assert f"the run in {run_dir} that --force was replacing is back" in err
+  assert (run_dir / "videos" / "valve1.mp4").read_bytes() == b"a video"
+  assert run_logs(run_dir) == run_logs(unbroken[0])
+  # a --force that reaches its first checkpoint replaces the run, the user's files too
+  assert cli.main(["train", "--out", str(run_dir), "--force", "--no-progress", "--seed", "3"]) == 0
+  assert sorted(p.name for p in run_dir.iterdir()) == sorted(
+      ["checkpoints", "config.json", "eval.jsonl", "final", "metrics.jsonl", "plots", "tb"])
+  assert json.loads((run_dir / "config.json").read_text())["seed"] == 3
 
 
 # -- read-only folders ---------------------------------------------------------------
@@ -399,6 +610,23 @@ def test_a_read_only_run_is_evaluated_but_not_resumed(unbroken, tmp_path, read_o
   assert cli.main(["train", "--out", str(run_dir / "new")]) == 2
   one_error_line(capsys, "not writable")
   assert sorted(p.name for p in run_dir.rglob("*")) == before
+
+
+def test_a_folder_made_read_only_mid_run_stops_it_in_one_line_and_the_process_ends(small_disk,
+                                                                                   tmp_path):
+  """A real read-only mount (a bind mount of checkpoints/, made read-only once the first
+  checkpoint is written): orbax's writer threads once waited 20 minutes for a folder that
+  could not be made, and the process with them."""
+  if not small_disk:
+    pytest.skip("this machine lets no process mount a file system of its own: no read-only "
+                "mount to test with (as root, chmod does not stop writes)")
+  status, err, run_dir = _run_on_small_disk(small_disk, tmp_path, ["train", "--out", "RUN",
+                                                                   "--no-progress"],
+                                            starve_after=1, read_only="checkpoints")
+  line = one_error_line(err, "training stopped at step 4: could not write checkpoint",
+                        "Read-only file system", "the last good checkpoint is ")
+  assert line.endswith(str(pathlib.Path("run", "checkpoints", "2")))
+  assert status == 2 and good_checkpoints_of(run_dir) == [2]
 
 
 # -- bad input -------------------------------------------------------------------------
@@ -456,6 +684,74 @@ def test_a_bad_config_file_is_named_with_its_field(unbroken, tmp_path, capsys, t
     assert cli.main(argv) == 2
     one_error_line(capsys, f"config file {run_dir / 'config.json'}", fragment)
   assert sorted(p.name for p in run_dir.rglob("*")) == before
+
+
+def test_a_config_file_missing_a_field_is_named_never_filled_in(unbroken, tmp_path, capsys,
+                                                               toy_tasks):
+  run_dir = tmp_path / "run"
+  shutil.copytree(unbroken[0], run_dir)
+  config = json.loads((run_dir / "config.json").read_text())
+  del config["unroll_length"]  # today's default (20) is not the run's (5)
+  (run_dir / "config.json").write_text(json.dumps(config))
+  before = _snapshot(run_dir)
+  for argv in (["eval", str(run_dir)], ["train", "--out", str(run_dir), "--resume"]):
+    assert cli.main(argv) == 2
+    line = one_error_line(capsys, "missing config field(s): unroll_length")
+    assert "upgrade" not in line
+  assert _snapshot(run_dir) == before
+  # a run of an older release: one line says how to upgrade it, and the upgrade works
+  config = {k: v for k, v in config.items() if k not in config_lib.ADDED}
+  (run_dir / "config.json").write_text(json.dumps({**config, "unroll_length": 5}))
+  assert cli.main(["eval", str(run_dir)]) == 2
+  one_error_line(capsys, "missing config field(s): ", f"discosyn upgrade {run_dir}` adds ",
+                 "squash_z = false")
+  assert cli.main(["upgrade", str(run_dir)]) == 0
+  assert config_lib.load(run_dir / "config.json") == TOY.replace(**config_lib.ADDED)
+
+
+@pytest.mark.parametrize("how, fragment", [
+    ("empty", "is not a synergy file"),
+    ("no meta", "is not a synergy file"),
+    ("meta lacks a field", "its meta has no n_synergies"),
+    ("no kernel", "synergies.kernel is absent there"),
+    ("wrong shape", "synergies.kernel is (3, 20) there, (2, 20) for that decoder"),
+])
+def test_a_malformed_decoder_file_is_refused_in_one_line(tmp_path, capsys, toy_tasks, how, fragment):
+  from discosyn_jax import synergies
+
+  path = tmp_path / "decoder.npz"
+  params = {"synergies": {"kernel": np.zeros((2, 20)), "bias": np.zeros(20)},
+            "log_std": np.zeros(20)}
+  synergies.save(path, params, TOY.to_dict())
+  with np.load(path) as data:
+    arrays = dict(data)
+  meta = json.loads(str(arrays["meta"]))
+  if how == "empty":
+    path.write_bytes(b"")
+  elif how == "no meta":
+    np.savez(path, **{k: v for k, v in arrays.items() if k != "meta"})
+  elif how == "meta lacks a field":
+    np.savez(path, **{**arrays, "meta": json.dumps({k: v for k, v in meta.items()
+                                                   if k != "n_synergies"})})
+  elif how == "no kernel":
+    np.savez(path, **{k: v for k, v in arrays.items() if k != "synergies.kernel"})
+  else:
+    np.savez(path, **{**arrays, "synergies.kernel": np.zeros((3, 20))})
+  out = tmp_path / "run"
+  assert cli.main(["train", "--out", str(out), "--decoder-from", str(path)]) == 2
+  one_error_line(capsys, str(path), fragment)
+  assert not out.exists()
+
+
+def test_empty_names_are_refused_not_taken_for_defaults(tmp_path, capsys, monkeypatch):
+  monkeypatch.chdir(tmp_path)
+  assert cli.main(["train", "--preset", "", "--out", "run"]) == 2
+  one_error_line(capsys, "unknown preset ''")
+  assert cli.main(["train", "--out", ""]) == 2
+  one_error_line(capsys, "--out is empty")
+  assert cli.main(["render-scenes", "valve9", "--out", "scenes"]) == 2
+  one_error_line(capsys, "valve9")
+  assert list(tmp_path.iterdir()) == []
 
 
 def test_the_output_folder_must_be_a_folder(tmp_path, capsys, toy_tasks):

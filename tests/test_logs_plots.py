@@ -40,6 +40,20 @@ def test_read_jsonl_keeps_rows_and_drops_only_a_cut_last_line(tmp_path):
     logs.read_jsonl(tmp_path / "missing.jsonl")
 
 
+def test_an_archived_log_reads_as_the_log_itself(toy_run, tmp_path):
+  """docs/results keeps metrics.jsonl compressed (`xz -9`): readers get the same rows, and a
+  log that is neither plain nor archived has none."""
+  import lzma
+
+  plain = toy_run / logs.METRICS_FILE
+  rows = logs.read_log(plain)
+  assert rows and rows == logs.read_jsonl(plain)
+  kept = tmp_path / logs.METRICS_FILE
+  (tmp_path / (logs.METRICS_FILE + logs.ARCHIVED)).write_bytes(lzma.compress(plain.read_bytes()))
+  assert not kept.exists() and logs.read_log(kept) == rows
+  assert logs.read_log(tmp_path / logs.EVAL_FILE) == []
+
+
 def test_tensorboard_holds_the_jsonl_numbers_over_env_steps(toy_run):
   metrics = logs.read_jsonl(toy_run / logs.METRICS_FILE)
   evals = logs.read_jsonl(toy_run / logs.EVAL_FILE)

@@ -8,6 +8,7 @@ from PIL import Image
 import tasks
 
 from discosyn_jax import checkpoints, cli, hand, loop, synergy_pictures, videos
+from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.train import Trainer
 
@@ -23,7 +24,8 @@ TINY = TrainConfig(tasks=("valve1",), n_synergies=2, policy_hidden=(16,), value_
 def saved_run(run_dir, config, envs=None):
   """A run directory holding the initial state as its final checkpoint: the pictures and
   videos read a run the same way whether it trained for a minute or not at all."""
-  loop.make_run_dir(run_dir, config, force=False)
+  run_dir.mkdir(parents=True, exist_ok=True)
+  config_lib.save(config, run_dir / loop.CONFIG_FILE)
   trainer = Trainer(config, envs)
   state = trainer.init()
   checkpoints.save(run_dir, state, config.keep_checkpoints, final=True)

@@ -29,7 +29,8 @@ def test_task_sets():
   assert tasks.TASK_SETS["unseen"] == ("valve_cylinder", "valve_cw", "screw_topdown")
   assert tasks.TASK_SETS["sparse"] == ("valve_goal",)
   assert tasks.sets_of("valve3") == ["set1", "set2"]
-  assert set(NEW) | {"valve_goal_dense", "dice_full"} | set(tasks.TASK_SETS["set1"]) == set(tasks.REGISTRY)
+  assert set(NEW) | {"valve_goal_dense", "dice_full"} | set(tasks.TASK_SETS["set1"]) | \
+      set(tasks.TASK_SETS["planted"]) | set(tasks.TASK_SETS["planted_slack"]) == set(tasks.REGISTRY)
 
 
 def _scripted_trajectory(env, name, steps, valve_angle=None):
@@ -96,7 +97,7 @@ def test_valve_variants_task_functions_run_on_mjx_states(name, valve3_on_both_ba
 
 
 # steps of the scripted motion compared, and the object's tolerance (see the docstring)
-AGREE = {"dice": (25, 0.03), "weight_pull": (60, 0.005), "screw": (25, 0.1),
+AGREE = {"dice": (25, 0.05), "weight_pull": (60, 0.005), "screw": (25, 0.1),
          "screw_topdown": (25, 0.1), "valve_cylinder": (25, 0.05)}
 
 
@@ -106,9 +107,10 @@ def test_native_and_mjx_agree(name):
   backend, MJX starting from the same state (helpers.on_mjx; the MJX compile dominates:
   one trajectory per distinct physics, and no MJX reset, which tests/test_backends.py runs).
 
-  Tolerances: hand joints 0.02 rad as for valve3 (tests/test_backends.py: float32 MJX vs
-  float64 C, different contact code). Objects: the dice's position and quaternion
-  components 0.03 (measured 0.01 over 25 steps), the weight's lift 5 mm over 60 steps (it
+  Tolerances: hand joints 0.05 rad (float32 MJX vs float64 C, different contact code; at
+  the fast profile's 8 ms steps the dice and the screw measured 0.020 and 0.038 rad over 25
+  steps, against < 0.02 at 4 ms). Objects: the dice's position and quaternion
+  components 0.05 (measured 0.01 over 25 steps at 4 ms, 0.035 at 8 ms), the weight's lift 5 mm over 60 steps (it
   starts rising at step 50), a screwdriver's angle 0.1 rad (dry friction switches between
   stick and slip), the wheel valve's angle 0.05 rad as valve3's.
   """
@@ -126,7 +128,7 @@ def test_native_and_mjx_agree(name):
     out[env.backend] = np.asarray(jax.vmap(env.physics.view)(states.pipeline_state).qpos)
   native_q, mjx_q = out["native"], out["mjx"]
   hand_q = hand.qpos_indices(native.mj_model)
-  np.testing.assert_allclose(mjx_q[:, hand_q], native_q[:, hand_q], atol=0.02)
+  np.testing.assert_allclose(mjx_q[:, hand_q], native_q[:, hand_q], atol=0.05)
   obj = OBJECT_QPOS.get(name, slice(24, 25))
   np.testing.assert_allclose(mjx_q[:, obj], native_q[:, obj], atol=atol)
   if name == "weight_pull":

@@ -10,7 +10,7 @@ import pytest
 from flax import struct
 
 import tasks
-from discosyn_jax import checkpoints, cli, loop, wrappers
+from discosyn_jax import checkpoints, cli, loop, runs, wrappers
 from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.train import Trainer
@@ -152,13 +152,17 @@ def test_force_replaces_the_run_and_only_it(tmp_path):
   run_dir, beside = tmp_path / "run", tmp_path / "beside.txt"
   beside.write_text("kept")
   old, new = TrainConfig(**TINY, steps=4), TrainConfig(**TINY, steps=9)
-  loop.make_run_dir(run_dir, loop.run_config(run_dir, old, resume=False, force=False), force=False)
+  run_dir.mkdir()
+  config_lib.save(loop.run_config(run_dir, old, resume=False, force=False), run_dir / "config.json")
   (run_dir / "metrics.jsonl").write_text("{}\n")
   (run_dir / "checkpoints" / "2").mkdir(parents=True)
   with pytest.raises(ValueError, match="already holds a run"):
     loop.run_config(run_dir, new, resume=False, force=False)
   assert loop.run_config(run_dir, new, resume=False, force=True) == new
-  loop.make_run_dir(run_dir, new, force=True)
+  with runs.Writer(run_dir) as writer:  # the old run is set aside until the new one has a checkpoint
+    writer.begin(lambda: config_lib.save(new, run_dir / "config.json"), replace=True)
+    assert sorted(p.name for p in run_dir.iterdir()) == ["config.json", "replaced", "writer.lock"]
+    writer.keep()
   assert [p.name for p in run_dir.iterdir()] == ["config.json"]
   assert config_lib.load(run_dir / "config.json") == new
   assert beside.read_text() == "kept"

@@ -47,3 +47,27 @@ def test_only_the_finished_envs_are_reset():
   # the episode counters: env 0's second episode lasted 3 steps; env 1's second and the
   # others' second episodes have run 2 and 1 steps
   assert [float(x) for x in state.info["episode_metrics"]["length"]] == [3, 2, 1, 1, 1, 1]
+
+
+def test_pooled_reset_restarts_from_the_pool_without_resetting_the_env():
+  """With a reset pool, a finished env restarts from one of the pool's initial states,
+  the others step on, and the step never calls the env's reset (MJX: no mjx.forward)."""
+  base = StopOnSignal(0.0, obs_size=4, episode_length=3)
+  env = wrappers.for_training(base, reset_pool=True)
+  state = env.reset(jax.random.split(jax.random.PRNGKey(0), 6))
+  pool_obs = np.asarray(state.info["reset_pool"].obs)
+  assert pool_obs.shape == (6, 4) and not np.allclose(pool_obs, np.asarray(state.obs))
+  calls = []
+  original = base.reset
+  base.reset = lambda rng: calls.append(1) or original(rng)
+  step = jax.jit(env.step)
+  starts = set()
+  for t in range(12):  # env 0 signals the end every step: a new episode each time
+    state = step(state, jnp.zeros((6, 20)).at[0, 0].set(1.0))
+    assert float(state.info["steps"][0]) == 0.0
+    row = np.flatnonzero(np.all(np.isclose(pool_obs, np.asarray(state.obs[0])), axis=1))
+    assert row.size == 1  # its new episode starts from a pool state
+    starts.add(int(row[0]))
+  assert len(starts) > 2  # drawn at random, not always the same
+  assert not calls  # traced without the env's reset
+  np.testing.assert_array_equal(np.asarray(state.info["reset_pool"].obs), pool_obs)

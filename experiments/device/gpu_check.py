@@ -11,7 +11,7 @@ cut short keeps what it measured):
              for PRESET at SCALE (the training this check then runs)
   physics    MJX env (control) steps/s of the jitted, vmapped `HandEnv.step` in a scan of
              --physics-steps steps, for every task of the preset at every --batches, and for
-             valve3 at 8192 envs under each of experiments/mjx_settings.SETTINGS (the modules
+             valve3 at 8192 envs under each of experiments/physics_study.SETTINGS (the modules
              compile in parallel threads: the machine has many cores, the clock is short)
   train      one line per train step: env steps, wall seconds, env steps/s, training success
   eval       deterministic success and return per task every --eval-every train steps and at
@@ -42,7 +42,7 @@ import jax.numpy as jnp  # noqa: E402
 
 import tasks  # noqa: E402
 from discosyn_jax.train import Trainer  # noqa: E402
-from experiments import mjx_settings, paper, presets  # noqa: E402
+from experiments import paper, physics_study, presets  # noqa: E402
 
 
 class Log:
@@ -85,12 +85,11 @@ def timed(fn):
 
 def physics_modules(names, batches, settings, steps: int):
   """[(label, lowered scan, its arguments)] for every task x batch, and valve3 at the largest
-  batch but one under each of `settings` (experiments/mjx_settings.py)."""
-  jobs = [(dict(task=name, batch=batch, setting="scene"), tasks.make(name, backend="mjx"))
+  batch but one under each of `settings` (experiments/physics_study.py)."""
+  jobs = [(dict(task=name, batch=batch, setting="default"), tasks.make(name, backend="mjx"))
           for name in names for batch in batches]
   for setting in settings:
-    opt, substeps = mjx_settings.SETTINGS[setting]
-    env = mjx_settings.with_settings("valve3", opt, substeps, None)
+    env = physics_study.make_env("valve3", setting, backend="mjx")
     jobs.append((dict(task="valve3", batch=sorted(batches)[-2:][0], setting=setting), env))
   out = []
   for label, env in jobs:
@@ -140,9 +139,9 @@ def main(argv=None):
                       help="physics of the training (native: a CPU dry run)")
   parser.add_argument("--batches", type=int, nargs="+", default=[2048, 8192, 16384],
                       help="envs per task of the physics timings")
-  parser.add_argument("--settings", nargs="*", choices=list(mjx_settings.SETTINGS),
-                      default=[s for s in mjx_settings.SETTINGS if not s.startswith("scene")],
-                      help="MJX settings timed on valve3 beside the scene's (none: skip)")
+  parser.add_argument("--settings", nargs="*", choices=list(physics_study.SETTINGS),
+                      default=["ref", "8x5", "8x5-it4", "10x4-it4"],
+                      help="physics settings timed on valve3 beside the default (none: skip)")
   parser.add_argument("--physics-steps", type=int, default=20, help="control steps per timing")
   parser.add_argument("--no-physics", dest="physics", action="store_false",
                       help="skip the physics timings (CPU dry runs)")

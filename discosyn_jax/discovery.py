@@ -1,0 +1,50 @@
+"""Is a synergy space discovered, i.e. determined by the task set rather than by the seed?
+The subspaces of runs' decoders, at their start and at their end, and the overlaps between
+them (diagnostics.overlap: 1 the same subspace, chance max(p, q) / n).
+
+A run's synergy basis is that of its decoder (diagnostics.synergy_basis: W, or an MLP's
+Jacobian at z = 0). Its start is rebuilt from its config alone, as the Trainer draws it
+(train.initial_decoder), or read from its `decoder_from`.
+"""
+
+from __future__ import annotations
+
+import itertools
+import pathlib
+
+import numpy as np
+
+from discosyn_jax import diagnostics, synergies
+from discosyn_jax.config import TrainConfig
+
+
+def learned_basis(run_dir: pathlib.Path) -> np.ndarray | None:
+  """The synergy basis of a run's newest checkpoint; None without one (logs kept alone)."""
+  try:
+    meta, params = synergies.read(run_dir)
+  except ValueError:
+    return None
+  return synergies.basis(meta, params)
+
+
+def initial_basis(config: TrainConfig, action_size: int = 20) -> np.ndarray | None:
+  """The synergy basis a run of `config` starts from; None when its decoder_from is gone."""
+  from discosyn_jax import loop, train
+
+  if config.decoder_from:
+    try:
+      params = loop.initial_decoder(config)
+    except ValueError:
+      return None
+  else:
+    params = train.initial_decoder(config, action_size)
+  return synergies.basis(synergies.architecture(config.to_dict()), params)
+
+
+def overlap(a: np.ndarray, b: np.ndarray) -> float:
+  return float(diagnostics.overlap(a, b))
+
+
+def cross_seed(bases: list[np.ndarray]) -> list[float]:
+  """The overlap of every pair of bases (seeds)."""
+  return [overlap(a, b) for a, b in itertools.combinations(bases, 2)]

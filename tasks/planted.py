@@ -1,0 +1,122 @@
+"""Planted synergies: pure-JAX tasks (no physics) whose target postures lie in one known
+subspace of the 20 actions, so that whether a decoder finds *the* synergy space of a task
+set, and not just an adequate one, can be measured (issue 26).
+
+  planted span U    an orthonormal (20, rank) basis drawn once from SPAN_SEED: every run
+                    and every task sees the same span
+  task n            its own `task_rank`-dim plane of the span, U A_n (A_n: the first columns
+                    of a random rotation of R^rank drawn from (SPAN_SEED, n)); the four
+                    tasks' planes together span U, no one of them does
+  an episode        a goal u ~ U[-1, 1]^task_rank, the observation; the target posture
+                    a* = scale U A_n u, fixed for the episode (`scale` keeps |a*| <= 0.9:
+                    a target is never clipped out of the span)
+  reward per step   1 - |e|^2 / E|a*|^2, e = clip(a, -1, 1) - a*: 0 for a = 0 on average,
+                    1 at the target
+  success           |e| < tolerance * sqrt(E|a*|^2) at the episode's end
+
+With `slack` only the part of e inside the planted span counts (e -> U U^T e): motion
+outside it is free, so every decoder whose subspace projects onto the whole span is
+adequate, as on the hand, where many subspaces turn the valves. Without slack the one
+adequate subspace of `rank` dimensions is the span itself.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from brax.envs.base import Env, State
+
+from discosyn_jax import checks
+
+SPAN_SEED = 26  # the issue's number; changing it plants another span in every run
+ACTION_SIZE = 20
+MAX_TARGET = 0.9  # the largest action a target asks for
+
+
+@dataclasses.dataclass(frozen=True)
+class PlantedConfig:
+  index: int = 0  # which task of the set: picks its plane of the span
+  rank: int = 3  # dimension of the planted span
+  task_rank: int = 2  # dimensions of the span one task's goals use
+  slack: bool = False  # only the error inside the planted span counts
+  episode_length: int = 10  # steps per episode; the goal is fixed for an episode
+  tolerance: float = 0.25  # success: counted error below this fraction of a typical target
+  span_seed: int = SPAN_SEED
+
+  def __post_init__(self):
+    checks.fields(self)
+    if not 1 <= self.rank <= ACTION_SIZE:
+      raise ValueError(f"rank must be between 1 and {ACTION_SIZE}, not {self.rank}")
+    if not 1 <= self.task_rank <= self.rank:
+      raise ValueError(f"task_rank must be between 1 and rank ({self.rank}), not {self.task_rank}")
+    if self.index < 0 or self.episode_length < 1 or self.tolerance <= 0:
+      raise ValueError("index must not be negative, episode_length must be at least 1 and "
+                       "tolerance positive")
+
+
+def default_config(**overrides) -> PlantedConfig:
+  return PlantedConfig(**overrides)
+
+
+@functools.cache
+def span(rank: int = 3, seed: int = SPAN_SEED) -> np.ndarray:
+  """The planted span: an orthonormal (20, rank) basis, the same for every call."""
+  q, _ = np.linalg.qr(np.random.default_rng(seed).normal(size=(ACTION_SIZE, rank)))
+  return q.astype(np.float32)
+
+
+def task_plane(config: PlantedConfig) -> np.ndarray:
+  """(20, task_rank): the orthonormal basis of task `index`'s targets inside the span."""
+  rng = np.random.default_rng((config.span_seed, config.index))
+  rotation, _ = np.linalg.qr(rng.normal(size=(config.rank, config.rank)))
+  return (span(config.rank, config.span_seed) @ rotation[:, :config.task_rank]).astype(np.float32)
+
+
+class PlantedEnv(Env):
+  """One planted task with Brax's Env interface (module docstring); `backend` is accepted
+  and ignored, there is no physics."""
+
+  def __init__(self, config: PlantedConfig, backend: str = "auto"):
+    del backend
+    self.config = config
+    self.episode_length = config.episode_length
+    self.planted_span = span(config.rank, config.span_seed)  # what the decoder should find
+    plane = task_plane(config)
+    # the largest |a*_i| over the goal box is sum_j |plane_ij|
+    self._targets = jnp.asarray(plane * (MAX_TARGET / np.abs(plane).sum(axis=1).max()))
+    # E|a*|^2 for u ~ U[-1, 1]^k: the columns of _targets are orthogonal, each u_j has variance 1/3
+    self._target_power = float((np.asarray(self._targets) ** 2).sum() / 3)
+    self._projector = jnp.asarray(self.planted_span @ self.planted_span.T)
+
+  @property
+  def observation_size(self) -> int:
+    return self.config.task_rank
+
+  @property
+  def action_size(self) -> int:
+    return ACTION_SIZE
+
+  @property
+  def backend(self) -> str:
+    return "jax"
+
+  def reset(self, rng: jax.Array) -> State:
+    goal = jax.random.uniform(rng, (self.config.task_rank,), minval=-1.0, maxval=1.0)
+    zero = jnp.zeros(())
+    metrics = {"success": zero, "diverged": zero, "reward/reach": zero}
+    return State(pipeline_state={"target": self._targets @ goal}, obs=goal, reward=zero,
+                 done=zero, metrics=metrics, info={})
+
+  def step(self, state: State, action: jax.Array) -> State:
+    error = jnp.clip(action, -1.0, 1.0) - state.pipeline_state["target"]
+    if self.config.slack:
+      error = self._projector @ error
+    power = jnp.sum(error ** 2)
+    reward = 1.0 - power / self._target_power
+    success = (power < self.config.tolerance ** 2 * self._target_power).astype(jnp.float32)
+    metrics = {**state.metrics, "success": success, "reward/reach": reward}
+    return state.replace(reward=reward, metrics=metrics)
