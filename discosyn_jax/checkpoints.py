@@ -29,7 +29,9 @@ import os
 import pathlib
 import re
 import shutil
+import signal
 import sys
+import threading
 
 import jax
 import orbax.checkpoint as ocp
@@ -70,6 +72,20 @@ def _quiet():
     yield
   finally:
     logger.setLevel(level)
+
+
+@contextlib.contextmanager
+def _signals_deferred():
+  """Ctrl-C and SIGTERM wait until the block ends (they act right after it): orbax's writer
+  threads, left running by a save the signal cut short, printed tracebacks at exit."""
+  if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "pthread_sigmask"):
+    yield
+    return
+  previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+  try:
+    yield
+  finally:
+    signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 def _silence_abandoned_writes() -> None:
@@ -120,7 +136,7 @@ def _write(folder: pathlib.Path, arrays: dict, step: int) -> None:
   # made (a read-only mount) left the others waiting for it for 20 minutes, and the
   # process could not exit until they gave up
   synchronous = ocp.AsyncOptions(create_directories_asynchronously=False)
-  with _quiet(), ocp.StandardCheckpointer(async_options=synchronous) as checkpointer:
+  with _signals_deferred(), _quiet(), ocp.StandardCheckpointer(async_options=synchronous) as checkpointer:
     checkpointer.save(folder.resolve(), arrays, custom_metadata={"step": step})
     checkpointer.wait_until_finished()
   files = {str(p.relative_to(folder)): {"bytes": p.stat().st_size, "sha256": _digest(p, sync=True)}

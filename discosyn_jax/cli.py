@@ -5,6 +5,7 @@ answers without JAX."""
 from __future__ import annotations
 
 import argparse
+import os
 import pathlib
 import shlex
 import signal
@@ -451,6 +452,22 @@ def main(argv: list[str] | None = None) -> int:
       signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
 
 
+def exit_with(code: int) -> None:
+  """End the process with `code`. A command stopped by Ctrl-C or SIGTERM has already closed
+  its files and said where it stopped; it ends at once, without the interpreter's shutdown,
+  where orbax's idle writer threads printed "Event loop is closed" tracebacks after that line."""
+  if code in (128 + signal.SIGINT, 128 + signal.SIGTERM):
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
+  sys.exit(code)
+
+
+def entry() -> None:
+  """The `discosyn` command."""
+  exit_with(main())
+
+
 def _run(args) -> int:
   import discosyn_jax
 
@@ -482,4 +499,4 @@ def _run(args) -> int:
 
 
 if __name__ == "__main__":
-  sys.exit(main())
+  entry()

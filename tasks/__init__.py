@@ -76,14 +76,14 @@ REGISTRY: dict[str, Entry] = {
 # The "fast" physics profile: each task's cheapest setting that stayed within the tolerances
 # of the reference (4 ms x 10) in experiments/physics_study.py (docs/BENCHMARKS.md, "Physics
 # settings", 2026-12-02): 8 ms steps, the valves' contacts as stiff as at 4 ms (refsafe off;
-# the screw diverged so). A task not listed keeps the reference: weight_pull's rope failed
-# every cheaper setting, the unseen and sparse tasks are not measured yet, and the pure-JAX
-# tasks have no physics.
+# the screws diverge or bounce so). A task not listed keeps the reference: weight_pull's rope
+# failed every cheaper setting, and the pure-JAX tasks have no physics.
 _EIGHT_MS = dict(n_substeps=5)
 _EIGHT_MS_STIFF = dict(n_substeps=5, refsafe=False)
-FAST: dict[str, dict] = {"valve0": _EIGHT_MS_STIFF, "valve1": _EIGHT_MS_STIFF,
-                         "valve2": _EIGHT_MS_STIFF, "valve3": _EIGHT_MS_STIFF,
-                         "dice": _EIGHT_MS, "screw": _EIGHT_MS}
+FAST: dict[str, dict] = {
+    **{name: _EIGHT_MS_STIFF for name in ("valve0", "valve1", "valve2", "valve3", "valve_cylinder",
+                                          "valve_cw", "valve_goal", "valve_goal_dense")},
+    **{name: _EIGHT_MS for name in ("dice", "dice_full", "screw", "screw_topdown")}}
 
 TASK_SETS: dict[str, tuple[str, ...]] = {
     "set1": ("valve0", "valve1", "valve2", "valve3"),

@@ -123,4 +123,6 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-  sys.exit(main())
+  from discosyn_jax import cli
+
+  cli.exit_with(main())  # as the `discosyn` command ends
