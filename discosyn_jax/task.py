@@ -48,12 +48,12 @@ class TaskConfig:
         raise ValueError(f"{name} must be at least 1, not {getattr(self, name)}")
     if self.cone not in _CONES:
       raise ValueError(f"cone must be one of {', '.join(_CONES)}, not {self.cone!r}")
+    if self.hand_noise < 0:
+      raise ValueError(f"hand_noise must not be negative, not {self.hand_noise}")
 
   @property
   def timestep(self) -> float:
     return CONTROL_DT / self.n_substeps
-    if self.hand_noise < 0:
-      raise ValueError(f"hand_noise must not be negative, not {self.hand_noise}")
 
 
 class Task(abc.ABC):

@@ -22,6 +22,7 @@ import tasks
 from discosyn_jax import hand, scripted
 from discosyn_jax.physics.native import deepest_penetration
 from discosyn_jax.rollouts import run_episode
+from experiments import physics_study
 
 DEFAULT_TASKS = ("dice", "weight_pull", "screw", "valve_cylinder", "valve_cw", "screw_topdown", "valve_goal")
 
@@ -60,8 +61,7 @@ def rollout(env, actions_fn, episodes: int, seed: int):
 def report(label, env, info, pstate, success, done):
   ended = done.max(0) > 0
   # an episode that ended early is judged by its state when it ended
-  first_end = np.where(ended, done.argmax(0), env.episode_length - 1)
-  final_success = success[first_end, np.arange(success.shape[1])]
+  final_success = physics_study.final_success(success, done, env.episode_length)
   hand_v = hand.qvel_indices(env.mj_model)
   obj_v = [i for i in range(env.mj_model.nv) if i not in set(hand_v)]
   measure, best = progress(env, pstate.qpos, info)

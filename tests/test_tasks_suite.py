@@ -346,6 +346,8 @@ def test_dense_goal_twin_grows_towards_the_goal():
     ("weight_pull", {"success_lift": -0.01}), ("screw", {"pitch": 0.0}),
     ("screw", {"success_depth": 0.05}), ("valve_goal", {"threshold": 1.0}),
     ("valve_cylinder", {"shape": "square"}),
+    # every task's own settings (TaskConfig): the physics and the start noise
+    ("valve3", {"hand_noise": -0.1}), ("valve3", {"n_substeps": 0}), ("valve3", {"cone": "round"}),
 ])
 def test_bad_settings_are_refused(name, bad):
   with pytest.raises(ValueError):
