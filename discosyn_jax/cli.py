@@ -101,6 +101,7 @@ _TRAIN_FLAGS = {
     "eval_every": "eval_every",
     "eval_envs": "eval_envs", "checkpoint_every": "checkpoint_every",
     "decoder_weight_decay": "decoder_weight_decay",
+    "decoder_weight_decay_steps": "decoder_weight_decay_steps",
 }
 
 
@@ -274,6 +275,9 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("--decoder-weight-decay", type=float, help="AdamW weight decay of the decoder's "
                  "weights, a tie-breaker between adequate synergy spaces (issue 26; 0: the paper's "
                  "update); " + preset_default("decoder_weight_decay"))
+  p.add_argument("--decoder-weight-decay-steps", type=int, help="the decay falls linearly to "
+                 "nothing over this many train steps (0: constant); "
+                 + preset_default("decoder_weight_decay_steps"))
   p.add_argument("--lr", type=float, help="Adam learning rate of the policy, value and decoder "
                  "networks; " + preset_default("learning_rate"))
   p.add_argument("--num-envs", type=int, help="parallel envs per task; "

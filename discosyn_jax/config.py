@@ -30,7 +30,8 @@ MAX_STEPS = 2**31 - 1  # the state counts train steps in an int32
 # Fields added since the first release, each with the value every run before it had: a
 # config.json without them is refused (never filled with today's default) until
 # `discosyn upgrade RUN` writes these values into it (upgrade below).
-ADDED = {"squash_z": False, "physics": "reference", "reset_pool": False, "decoder_weight_decay": 0.0}
+ADDED = {"squash_z": False, "physics": "reference", "reset_pool": False, "decoder_weight_decay": 0.0,
+         "decoder_weight_decay_steps": 0}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -53,6 +54,11 @@ class TrainConfig:
   # the tasks equally well, the smallest, whose columns keep only the directions the tasks
   # use; a tie-breaker between adequate synergy spaces (issue 26). 0: the paper's update
   decoder_weight_decay: float = 0.0
+  # > 0: the decay falls linearly to nothing over this many train steps, then stays off:
+  # the tie is broken by the decay integrated early, and a decay still on at the end costs
+  # the decoder its reach (issue 26); 0: constant. Counted in train steps, so a resumed run
+  # keeps its schedule
+  decoder_weight_decay_steps: int = 0
   # the extended reward, paper Eq. 2: alpha1 H(pi(z|s,n)) + alpha2 log q(z|a) + alpha3 H(p(a|z))
   alpha1: float = 1e-3
   alpha2: float = 1e-2
@@ -125,7 +131,7 @@ class TrainConfig:
     if self.steps > MAX_STEPS:
       raise ValueError(f"steps must be at most {MAX_STEPS}, not {self.steps}")
     for name in ("eval_every", "checkpoint_every", "alpha1", "alpha2", "alpha3", "value_coef",
-                 "decoder_weight_decay"):
+                 "decoder_weight_decay", "decoder_weight_decay_steps"):
       if getattr(self, name) < 0:
         raise ValueError(f"{name} must not be negative, not {getattr(self, name)}")
     for name in ("policy_hidden", "value_hidden", "decoder_hidden", "discriminator_hidden"):

@@ -101,13 +101,21 @@ def loss(params, model: DiscoSyn, samples: Sequence[Samples], config: TrainConfi
 def optimizer(config: TrainConfig) -> optax.GradientTransformation:
   """Adam per role: heads and decoder share one (the PPO objective), the discriminator has
   its own learning rate, a frozen decoder gets no updates at all. A decoder weight decay
-  shrinks the decoder's weights (kernels, not biases or noise) as AdamW does."""
+  shrinks the decoder's weights (kernels, not biases or noise) as AdamW does, constant or
+  falling linearly to nothing over `decoder_weight_decay_steps` train steps."""
 
   def transform(lr, decay=0.0):
     step = optax.adam(lr)  # without decay: the optimiser state of every earlier run
     if decay:
-      step = optax.chain(optax.scale_by_adam(), optax.add_decayed_weights(decay, _decoder_weights),
-                         optax.scale_by_learning_rate(lr))
+      if config.decoder_weight_decay_steps:
+        updates_per_step = config.num_minibatches * config.update_epochs
+        decay = optax.linear_schedule(decay, 0.0,
+                                      config.decoder_weight_decay_steps * updates_per_step)
+        decayed = optax.inject_hyperparams(optax.add_decayed_weights, static_args="mask")(
+            decay, mask=_decoder_weights)
+      else:
+        decayed = optax.add_decayed_weights(decay, _decoder_weights)
+      step = optax.chain(optax.scale_by_adam(), decayed, optax.scale_by_learning_rate(lr))
     return optax.chain(optax.clip_by_global_norm(config.max_grad_norm), step)
 
   def labels(params):

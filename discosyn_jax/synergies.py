@@ -273,7 +273,8 @@ def load_decoder(path, config) -> dict:
 def method_name(meta) -> str:
   """The paper's name of a synergy model: 'PCA4', 'AE6', 'DiscoSyn3-L', 'DiscoSyn4-NL', and
   'Random3-L' for the control (a decoder frozen at its random initialisation), and
-  'DiscoSyn3-L-wd3' for a decoder learned with weight decay 3 (issue 26's tie-breaker).
+  'DiscoSyn3-L-wd3' for a decoder learned with weight decay 3 (issue 26's tie-breaker),
+  'DiscoSyn3-L-wd8a200' for one whose decay falls to nothing over 200 train steps.
   `meta` is a synergy file's meta, or anything with the ARCHITECTURE fields (a config)."""
   get = meta.get if isinstance(meta, dict) else lambda k, d=None: getattr(meta, k, d)
   if get("method"):
@@ -282,7 +283,10 @@ def method_name(meta) -> str:
   kind = "Random" if get("freeze_decoder") and not get("decoder_from") else "DiscoSyn"
   name = f"{kind}{get('n_synergies')}-{'L' if get('decoder') == 'linear' else 'NL'}"
   decay = 0 if get("freeze_decoder") else get("decoder_weight_decay")  # frozen: never applied
-  return f"{name}-wd{decay:g}" if decay else name
+  if not decay:
+    return name
+  anneal = get("decoder_weight_decay_steps", 0)
+  return f"{name}-wd{decay:g}" + (f"a{anneal}" if anneal else "")
 
 
 def frozen_fields(meta: dict[str, Any], path) -> dict[str, Any]:

@@ -203,3 +203,20 @@ def test_the_controls_build_run_and_show_in_the_report(tmp_path):
   assert all(row.endswith("| 0.15 |") for row in rows.values())
   # a frozen control stays at its start; one seed has no pairs
   assert rows["Random3-L-zfree"] == "| Random3-L-zfree | set1 | – | – | 1.00 [1] | – | 0.15 |"
+
+
+def test_an_annealed_decay_falls_linearly_to_nothing_over_its_train_steps():
+  config = TrainConfig(tasks=("a",), n_synergies=3, num_minibatches=2, update_epochs=2,
+                       decoder_weight_decay=2.0, decoder_weight_decay_steps=3)
+  params = make_trainer(config).initial_params()
+  zero = jax.tree.map(jnp.zeros_like, params)
+  kernel = lambda tree: tree["params"]["synergy_decoder"]["synergies"]["kernel"]
+  optimizer = ppo.optimizer(config)
+  state = optimizer.init(params)
+  shrink = []  # the decay applied at each optimiser update, 4 per train step
+  for _ in range(14):
+    updates, state = optimizer.update(zero, state, params)
+    shrink.append(float(np.mean(kernel(updates) / kernel(params))) / -config.learning_rate)
+  np.testing.assert_allclose(shrink[:12], 2.0 * (1 - np.arange(12) / 12), atol=1e-5)
+  assert shrink[12:] == [0.0, 0.0]  # off after its 3 train steps
+  assert synergies.method_name(config) == "DiscoSyn3-L-wd2a3"
