@@ -1,12 +1,8 @@
 """Checkpoints of the whole TrainState (parameters, every optimiser state, normalisers, env
 states, rng, step) with orbax, each with a manifest that lets a reader trust it.
 
-A run directory holds:
-  config.json           the TrainConfig
-  checkpoints/<step>/   periodic checkpoints (the newest `keep_checkpoints` kept)
-  final/                the state at the end of the run
-  metrics.jsonl, eval.jsonl, tb/
-  writer.lock           while a process writes it (runs.py)
+A run keeps them in checkpoints/<step>/ (the newest `keep_checkpoints`) and final/
+(layout.py names the rest of its folder).
 
 A checkpoint is an orbax checkpoint plus manifest.json: its step, and the size and SHA-256
 of every file in it. It is written whole as `NAME.new` beside the others and swapped in by
@@ -15,6 +11,9 @@ was complete before it. Readers verify the manifest (a missing one, or a file it
 list, is damage too): a damaged checkpoint is skipped with one line naming it, and the
 newest good one is used; of a run being written, the checkpoints that rotate away while
 read are read again (read_newest).
+
+One file over 300 lines on purpose: writing, verifying and reading share one format and one
+swap protocol, which a split would spread over two files that must change together.
 """
 
 from __future__ import annotations
@@ -36,10 +35,8 @@ import threading
 import jax
 import orbax.checkpoint as ocp
 
-from discosyn_jax import atomic
+from discosyn_jax import atomic, layout
 
-FINAL = "final"
-PERIODIC = "checkpoints"
 MANIFEST = "manifest.json"
 _ITEM = "default"  # the item folder of checkpoints written by orbax's CheckpointManager (older runs)
 _ORBAX_TMP = ".orbax-checkpoint-tmp"  # orbax's own folder while it writes
@@ -175,9 +172,9 @@ def tidy(run_dir: pathlib.Path) -> None:
   """Finish what a kill interrupted in a run's checkpoints (the writer's job, before it
   reads or saves): unfinished writes go, an interrupted swap is completed or undone."""
   run_dir = pathlib.Path(run_dir)
-  atomic.settle(run_dir / FINAL)
+  atomic.settle(run_dir / layout.FINAL)
   _clear_leftovers(run_dir)
-  periodic = run_dir / PERIODIC
+  periodic = run_dir / layout.PERIODIC
   if periodic.is_dir():
     for name in {p.name.split(".")[0] for p in periodic.iterdir() if p.name.split(".")[0].isdigit()}:
       atomic.settle(periodic / name)
@@ -189,7 +186,7 @@ def save(run_dir: pathlib.Path, state, keep: int, final: bool = False) -> pathli
   as `final`; return its folder. Raises SaveFailed, leaving the older checkpoints intact."""
   run_dir = pathlib.Path(run_dir)
   step = int(state.step)
-  target = run_dir / FINAL if final else run_dir / PERIODIC / str(step)
+  target = run_dir / layout.FINAL if final else run_dir / layout.PERIODIC / str(step)
   tidy(run_dir)
   new = atomic.sibling(target, atomic.NEW)
   arrays, failure = _arrays(state), None
@@ -207,14 +204,14 @@ def save(run_dir: pathlib.Path, state, keep: int, final: bool = False) -> pathli
   atomic.swap_in(new, target)
   if not final:
     for old in sorted(_periodic_steps(run_dir), reverse=True)[keep:]:
-      atomic.remove_dir(run_dir / PERIODIC / str(old))
+      atomic.remove_dir(run_dir / layout.PERIODIC / str(old))
   return target
 
 
 # -- reading -------------------------------------------------------------------
 
 def _periodic_steps(run_dir: pathlib.Path) -> list[int]:
-  periodic = run_dir / PERIODIC
+  periodic = run_dir / layout.PERIODIC
   if not periodic.is_dir():
     return []
   names = {p.name.removesuffix(atomic.OLD) for p in periodic.iterdir()}
@@ -289,9 +286,9 @@ def candidates(run_dir: pathlib.Path) -> list[pathlib.Path]:
   whose step cannot be read first of all), unverified; the `.old` copy of one whose swap a
   kill interrupted stands in for it."""
   run_dir = pathlib.Path(run_dir)
-  found = [(step, 0, atomic.readable(run_dir / PERIODIC / str(step)))
+  found = [(step, 0, atomic.readable(run_dir / layout.PERIODIC / str(step)))
            for step in _periodic_steps(run_dir)]
-  final = atomic.readable(run_dir / FINAL)
+  final = atomic.readable(run_dir / layout.FINAL)
   if final is not None:
     found.append((_step_of(final), 1, final))
   return [path for _, _, path in sorted(found, key=lambda c: c[:2], reverse=True)]

@@ -119,6 +119,11 @@ class TrainConfig:
       raise ValueError(f"the synergy count must be between 1 and 20, not {self.n_synergies}")
     if self.decoder_from and self.decoder == "identity":
       raise ValueError("the identity decoder (full-action PPO) cannot take a decoder_from")
+    if self.freeze_decoder and (self.decoder_weight_decay or self.decoder_weight_decay_steps):
+      raise ValueError("a frozen decoder is not decayed: set decoder_weight_decay = 0 and "
+                       "decoder_weight_decay_steps = 0")
+    if self.decoder_weight_decay_steps and not self.decoder_weight_decay:
+      raise ValueError("decoder_weight_decay_steps anneals a decoder_weight_decay: set one")
     if not self.decoder_noise and self.alpha3:
       raise ValueError("a noiseless decoder (decoder_noise false) has no entropy: set alpha3 = 0")
     if self.physics not in PHYSICS:

@@ -4,7 +4,7 @@ them (diagnostics.overlap: 1 the same subspace, chance max(p, q) / n).
 
 A run's synergy basis is that of its decoder (diagnostics.synergy_basis: W, or an MLP's
 Jacobian at z = 0). Its start is rebuilt from its config alone, as the Trainer draws it
-(train.initial_decoder), or read from its `decoder_from`.
+(train.random_decoder), or read from its `decoder_from`.
 """
 
 from __future__ import annotations
@@ -29,15 +29,15 @@ def learned_basis(run_dir: pathlib.Path) -> np.ndarray | None:
 
 def initial_basis(config: TrainConfig, action_size: int = 20) -> np.ndarray | None:
   """The synergy basis a run of `config` starts from; None when its decoder_from is gone."""
-  from discosyn_jax import loop, train
+  from discosyn_jax import train
 
   if config.decoder_from:
     try:
-      params = loop.initial_decoder(config)
+      params = synergies.starting_decoder(config)
     except ValueError:
       return None
   else:
-    params = train.initial_decoder(config, action_size)
+    params = train.random_decoder(config, action_size)
   return synergies.basis(synergies.architecture(config.to_dict()), params)
 
 

@@ -43,7 +43,7 @@ class HandEnv(Env):
     return self._ctrl_mid + jnp.clip(action, -1.0, 1.0) * self._ctrl_half
 
   def reset(self, rng: jax.Array) -> State:
-    qpos, qvel, info = self.task.initial_state(rng, self.mj_model)
+    qpos, qvel, info = self.task.initial_state(rng)
     pstate = self.physics.init(qpos, qvel)
     view = self.physics.view(pstate)
     terms = self.task.reward_terms(view, view, info)

@@ -15,7 +15,6 @@ JOINTS = (
 )  # fmt: skip
 # the distal J0 of FF/MF/RF/LF follows J1 through an equality: not actuated
 ACTUATED = tuple(j for j in JOINTS if not (j.endswith("J0") and not j.startswith(("TH", "WR"))))
-FINGERTIP_SITES = ("fftip", "mftip", "rftip", "lftip", "thtip")
 
 
 def qpos_indices(model: mujoco.MjModel) -> np.ndarray:

@@ -11,11 +11,8 @@ import lzma
 import pathlib
 import time
 
-from discosyn_jax import atomic
+from discosyn_jax import atomic, layout
 
-METRICS_FILE = "metrics.jsonl"  # one row per train step
-EVAL_FILE = "eval.jsonl"  # one row per deterministic evaluation
-TENSORBOARD_DIR = "tb"
 # A kept run's bulky log compressed (docs/results keeps metrics.jsonl as metrics.jsonl.xz:
 # `xz -9 RUN/metrics.jsonl`); readers take either.
 ARCHIVED = ".xz"
@@ -98,7 +95,7 @@ class TensorBoard:
   def __init__(self, run_dir: pathlib.Path, history: tuple[list[dict], list[dict]] | None = None):
     from tensorboardX.event_file_writer import EventsWriter
 
-    folder = pathlib.Path(run_dir) / TENSORBOARD_DIR
+    folder = pathlib.Path(run_dir) / layout.TENSORBOARD_DIR
     if history is None:
       folder.mkdir(exist_ok=True)
       self.events = EventsWriter(str(folder / "events"))

@@ -10,21 +10,19 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import pathlib
 import shlex
 import sys
 import time
-from typing import Any
+from typing import Any, Callable
 
 import jax
 
-from discosyn_jax import checkpoints, checks, logs, plots, runs
+from discosyn_jax import checkpoints, checks, evaluation, layout, logs, plots, run_folder, runs, synergies
 from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.train import Trainer, TrainState
 
-CONFIG_FILE = runs.CONFIG_FILE
 
 
 class TrainingDiverged(RuntimeError):
@@ -34,108 +32,6 @@ class TrainingDiverged(RuntimeError):
 class WriteFailed(ValueError):
   """The run could not be written (a full disk, a folder made read-only); its last good
   checkpoint is kept, and the message says where it is."""
-
-
-def run_config(run_dir: pathlib.Path, config: TrainConfig, resume: bool, force: bool) -> TrainConfig:
-  """Check the run directory against what is asked, writing nothing, and return the config
-  to run.
-
-  A directory that holds a run is only continued (`resume`) or replaced (`force`, a run
-  this product made only), never silently overwritten, and never while another process
-  writes it; resuming keeps the run's config, except the fields that say how long and how
-  often (config.RESUMABLE), which are taken from `config`.
-  """
-  run_dir = pathlib.Path(run_dir)
-  if run_dir.exists() and not run_dir.is_dir():
-    raise ValueError(f"{run_dir} is a file, not a run directory")
-  holds_run = (run_dir / CONFIG_FILE).is_file()
-  if resume:
-    if not holds_run:
-      raise ValueError(f"--resume: {run_dir} holds no run to continue")
-    _check_writable(run_dir)
-    saved = config_lib.load(run_dir / CONFIG_FILE)
-    differs = config_lib.mismatches(saved, config)
-    if differs:
-      raise ValueError(f"--resume: the run in {run_dir} does not match: {differs[0]}")
-    return saved.replace(**{k: getattr(config, k) for k in config_lib.RESUMABLE}).validate()
-  if holds_run and not force:
-    raise ValueError(f"{run_dir} already holds a run; pass --resume to continue it or "
-                     f"--force to replace it")
-  # --force replaces a run, never a folder of something else
-  if holds_run and not runs.is_run(run_dir):
-    raise ValueError(f"{run_dir} holds a {CONFIG_FILE} but no run of discosyn (none of "
-                     f"{', '.join(sorted(runs.RUN_NAMES - {runs.ASIDE}))}); --force replaces "
-                     f"only a run: choose another directory")
-  if run_dir.exists() and not holds_run and runs.contents(run_dir):
-    raise ValueError(f"{run_dir} is not empty and holds no run; choose another directory")
-  _check_writable(run_dir)
-  return config.validate()
-
-
-def _check_writable(path: pathlib.Path) -> None:
-  """Refuse a path that cannot be written (or created): a file in the way, a read-only
-  folder or file system."""
-  existing = next(p for p in (path, *path.parents) if p.exists() or p == p.parent)
-  if not existing.is_dir():
-    raise ValueError(f"cannot write {path}: {existing} is a file, not a folder")
-  if not os.access(existing, os.W_OK | os.X_OK):
-    raise ValueError(f"cannot write {path}: {existing} is not writable")
-
-
-def find_run_dir(path: pathlib.Path) -> pathlib.Path:
-  """The run directory that is or holds `path` (a checkpoint folder in it)."""
-  path = pathlib.Path(path)
-  for run_dir in (path, *path.parents):
-    if (run_dir / CONFIG_FILE).is_file():
-      return run_dir
-  raise ValueError(f"{path} is not a run directory or a checkpoint in one")
-
-
-def finished(run_dir: pathlib.Path, config: TrainConfig) -> bool:
-  """Whether `run_dir` holds a finished run (a final checkpoint) of exactly `config`."""
-  run_dir = pathlib.Path(run_dir)
-  saved = run_dir / CONFIG_FILE
-  return ((run_dir / checkpoints.FINAL).is_dir() and saved.is_file()
-          and config_lib.load(saved) == config)
-
-
-def load_run(path: pathlib.Path) -> tuple[TrainConfig, pathlib.Path]:
-  """(config, checkpoint) of a run directory (its newest good checkpoint) or a checkpoint
-  folder."""
-  config, checkpoint, _ = read_run(path, checkpoints.verify)
-  return config, checkpoint
-
-
-def read_run(path: pathlib.Path, read,
-             warn=checkpoints.warn) -> tuple[TrainConfig, pathlib.Path, Any]:
-  """(config, checkpoint, read(checkpoint)) of a run directory (its newest checkpoint that
-  `read` takes, a snapshot even of a run being written: checkpoints.read_newest) or of a
-  checkpoint folder. Of a run another process is writing, one line says so and what was read."""
-  path = pathlib.Path(path)
-  run_dir = find_run_dir(path)
-  config = config_lib.load(run_dir / CONFIG_FILE)
-  if path != run_dir:
-    return config, path, read(path)
-  checkpoint, value = checkpoints.read_newest(
-      run_dir, read, lambda damaged, err: warn(f"{err}; skipped it"))
-  writer = runs.writer_of(run_dir)
-  if checkpoint is None:
-    raise ValueError(f"{run_dir} holds no good checkpoint yet"
-                     + (f" (it is being written by {writer})" if writer else ""))
-  if writer:
-    warn(f"{run_dir} is being written by {writer}: read its checkpoint {checkpoint}, "
-         f"step {checkpoints.verify(checkpoint)}")
-  return config, checkpoint, value
-
-
-def initial_decoder(config: TrainConfig):
-  """The decoder params a fresh run of `config` starts from: its `decoder_from`, else None
-  (the Trainer's random initialisation)."""
-  if not config.decoder_from:
-    return None
-  from discosyn_jax import synergies
-
-  return synergies.load_decoder(config.decoder_from, config)
 
 
 def decoder_reference(trainer: Trainer, state: TrainState, log=print):
@@ -148,7 +44,7 @@ def decoder_reference(trainer: Trainer, state: TrainState, log=print):
   if config.freeze_decoder:
     return jax.tree.map(lambda x: x.copy(), state.params)  # train_step donates the state
   try:
-    return trainer.initial_params(decoder_params=initial_decoder(config))
+    return trainer.initial_params(decoder_params=synergies.starting_decoder(config))
   except ValueError as e:
     log(f"no decoder movement in the logs: {e}")
     return None
@@ -171,40 +67,26 @@ def resume_latest(trainer: Trainer, run_dir: pathlib.Path,
   return checkpoints.read_newest(run_dir, lambda path: restore(trainer, path), damaged)
 
 
-def load_trained(path: pathlib.Path, make_trainer=Trainer, **changes) -> tuple[Trainer, TrainState]:
+def load_trained(path: pathlib.Path, make_trainer: Callable[[TrainConfig], Trainer], **changes) -> tuple[Trainer, TrainState]:
   """The trainer and the restored state of a run (its newest checkpoint that restores) or
   of a checkpoint; `changes` replace config fields that do not change the state's layout
-  (backend, eval_envs); `make_trainer(config)` builds the trainer (tests give tiny envs)."""
-  run_dir = find_run_dir(path)
-  config = config_lib.load(run_dir / CONFIG_FILE)
+  (backend, eval_envs); `make_trainer(config)` builds the trainer (`tasks.trainer`; tests give
+  tiny envs)."""
+  run_dir = run_folder.find_run_dir(path)
+  config = config_lib.load(run_dir / layout.CONFIG_FILE)
   trainer = make_trainer(config.replace(**changes).validate())
   checks.memory(trainer.config, trainer.envs)
-  _, _, state = read_run(path, lambda checkpoint: restore(trainer, checkpoint))
+  _, _, state = run_folder.read_run(path, lambda checkpoint: restore(trainer, checkpoint))
   return trainer, state
 
 
-def evaluate(trainer: Trainer, state: TrainState) -> dict[str, dict[str, float]]:
-  """Deterministic evaluation; its key depends on the step only, never on training's rng."""
-  key = jax.random.fold_in(jax.random.PRNGKey(trainer.config.seed + 1), int(state.step))
-  out = trainer.evaluate(state.params, state.normalizers, key)
-  return jax.tree.map(float, jax.device_get(out))
-
-
-def format_table(results: dict[str, dict[str, float]], step: int, config: TrainConfig) -> str:
-  """The evaluation table that ends a run and that `discosyn eval` prints."""
-  lines = [f"evaluation at step {step} ({step * config.env_steps_per_train_step:,} env steps, "
-           f"{config.eval_envs} deterministic episodes per task)",
-           f"{'task':16s} {'success':>8s} {'return':>9s}"]
-  for name, r in results.items():
-    lines.append(f"{name:16s} {r['success']:8.1%} {r['return']:9.2f}")
-  return "\n".join(lines)
-
-
-def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, force: bool = False,
-          progress: bool = True, trainer: Trainer | None = None, log=print,
-          devices=None, stop_at: float | None = None) -> dict[str, Any]:
+def train(config: TrainConfig, run_dir: pathlib.Path, *,
+          make_trainer: Callable[[TrainConfig], Trainer], resume: bool = False,
+          force: bool = False, progress: bool = True, log=print,
+          stop_at: float | None = None) -> dict[str, Any]:
   """Run (or continue) a training run in `run_dir`; return the final evaluation.
-  `devices`: the count to split the env batch over (default: all; see devices.py).
+  `make_trainer(config)` builds the Trainer of the config the run goes on with (its envs
+  and devices: `tasks.trainer` for the registered tasks), once the folder is checked.
   `stop_at`: end the run (final checkpoint and all) at the first evaluation at which every
   task's deterministic success is at least this.
 
@@ -218,14 +100,14 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *, resume: bool = False, f
   """
   run_dir = pathlib.Path(run_dir)
   runs.refuse_if_written(run_dir)
-  config = run_config(run_dir, config, resume, force)
-  trainer = trainer or Trainer(config, devices=devices)
+  config = run_folder.run_config(run_dir, config, resume, force)
+  trainer = make_trainer(config)
   checks.memory(config, trainer.envs)
   with runs.Writer(run_dir) as writer:
     # again, now that it is ours: another process may have made or replaced a run there
-    config = run_config(run_dir, config, resume, force)
+    config = run_folder.run_config(run_dir, config, resume, force)
     if not resume:
-      writer.begin(lambda: config_lib.save(config, run_dir / CONFIG_FILE), replace=force)
+      writer.begin(lambda: config_lib.save(config, run_dir / layout.CONFIG_FILE), replace=force)
     at = {"step": 0, "checkpoint": None}  # where the run is: what a failure names
     try:
       return _train(trainer, run_dir, resume, writer, at, progress, log, stop_at)
@@ -276,10 +158,10 @@ def _train(trainer: Trainer, run_dir: pathlib.Path, resume: bool, writer: runs.W
     history = _cut_logs(run_dir, start_step) if resume else None
     # a resumed run's wall clock goes on from where its kept logs end, not from 0
     start -= history[0][-1].get("wall_s", 0.0) if history and history[0] else 0.0
-    with open(run_dir / logs.METRICS_FILE, "a") as metrics_file, \
-         open(run_dir / logs.EVAL_FILE, "a") as eval_file, logs.TensorBoard(run_dir, history) as board:
+    with open(run_dir / layout.METRICS_FILE, "a") as metrics_file, \
+         open(run_dir / layout.EVAL_FILE, "a") as eval_file, logs.TensorBoard(run_dir, history) as board:
       if resume and _evaluates_at(config, step):  # the evaluation the cut removed, redone
-        _log_eval((eval_file, board), evaluate(trainer, state), step, config,
+        _log_eval((eval_file, board), evaluation.evaluate(trainer, state), step, config,
                   time.perf_counter() - start)
       tick = time.perf_counter()
       while int(state.step) < config.steps:
@@ -307,7 +189,7 @@ def _train(trainer: Trainer, run_dir: pathlib.Path, resume: bool, writer: runs.W
                               refresh=False)
           bar.update(1)
         if _evaluates_at(config, step):
-          results, evaluated_at = evaluate(trainer, state), step
+          results, evaluated_at = evaluation.evaluate(trainer, state), step
           _log_eval((eval_file, board), results, step, config, now - start)
           if stop_at is not None and all(r["success"] >= stop_at for r in results.values()):
             log(f"every task at >= {stop_at:.0%} deterministic success at step {step}: "
@@ -319,15 +201,15 @@ def _train(trainer: Trainer, run_dir: pathlib.Path, resume: bool, writer: runs.W
         bar.close()
         bar = None
       if evaluated_at != step:
-        results = evaluate(trainer, state)
+        results = evaluation.evaluate(trainer, state)
         _log_eval((eval_file, board), results, step, config, time.perf_counter() - start)
     save(final=True)
-    curves = plots.run_curves(run_dir, run_dir / plots.PLOTS_DIR)
+    curves = plots.run_curves(run_dir, run_dir / layout.PLOTS_DIR)
   finally:
     if bar is not None:
       bar.close()
   log(f"training curves: {', '.join(str(p) for p in curves)}")
-  log(format_table(results, step, config))
+  log(evaluation.format_table(results, step, config))
   return {"results": results, "state": state, "compile_s": compile_s}
 
 
@@ -341,7 +223,7 @@ def _start(trainer: Trainer, run_dir: pathlib.Path, resume: bool, log):
       log(f"resumed from {checkpoint} at step {int(state.step)}")
       return checkpoint, state
     log(f"{run_dir} holds no good checkpoint: starting from step 0")
-  return None, trainer.init(decoder_params=initial_decoder(trainer.config))
+  return None, trainer.init(decoder_params=synergies.starting_decoder(trainer.config))
 
 
 def _evaluates_at(config: TrainConfig, step: int) -> bool:
@@ -353,8 +235,8 @@ def _cut_logs(run_dir: pathlib.Path, step: int) -> tuple[list[dict], list[dict]]
   """The logs of a resumed run cut back to its restored step: what an unbroken run held
   then, but for the evaluation at that step, which may have been the end of a shorter run
   (the loop redoes it where an unbroken run would have made it)."""
-  return (logs.cut(run_dir / logs.METRICS_FILE, step),
-          logs.cut(run_dir / logs.EVAL_FILE, step - 1))
+  return (logs.cut(run_dir / layout.METRICS_FILE, step),
+          logs.cut(run_dir / layout.EVAL_FILE, step - 1))
 
 
 def _where(checkpoint: pathlib.Path | None, undone: bool, replaced: bool) -> str:

@@ -158,10 +158,13 @@ def build(config, obs_sizes: Sequence[int], action_size: int) -> DiscoSyn:
       init_z_std=config.init_z_std, init_action_std=config.init_action_std)
 
 
-# Top-level parameter collections by role: the optimiser labels them (ppo.optimizer).
+# Top-level parameter collections by role: the optimiser labels them (ppo.optimizer), the
+# gradient norms are logged per role (train.py).
 def role(name: str) -> str:
-  if name.startswith(("heads_", "values_")):
-    return "policy"
+  if name.startswith("heads_"):
+    return "heads"
+  if name.startswith("values_"):
+    return "values"
   if name == "synergy_decoder":
     return "decoder"
   if name == "discriminator":

@@ -17,9 +17,8 @@ matplotlib.use("Agg")  # files only, no display
 import matplotlib.pyplot as plt  # noqa: E402
 
 from discosyn_jax import config as config_lib  # noqa: E402
-from discosyn_jax import logs  # noqa: E402
+from discosyn_jax import layout, logs  # noqa: E402
 
-PLOTS_DIR = "plots"  # in the run directory
 
 # losses.png panels: one line per task (columns `task/name`), or one shared column
 _PER_TASK = ("policy_loss", "value_loss", "entropy_z")
@@ -29,12 +28,12 @@ _SHARED = ("loss", "entropy_a", "discriminator_loss", "grad_norm")
 def read_run(run_dir: pathlib.Path) -> tuple[config_lib.TrainConfig, list[dict], list[dict]]:
   """(config, metrics rows, eval rows) of a run directory."""
   run_dir = pathlib.Path(run_dir)
-  config_file = run_dir / "config.json"
+  config_file = run_dir / layout.CONFIG_FILE
   if not config_file.is_file():
     raise ValueError(f"{run_dir} holds no run (no config.json)")
   config = config_lib.load(config_file)
-  metrics = logs.read_log(run_dir / logs.METRICS_FILE)
-  evals = logs.read_log(run_dir / logs.EVAL_FILE)
+  metrics = logs.read_log(run_dir / layout.METRICS_FILE)
+  evals = logs.read_log(run_dir / layout.EVAL_FILE)
   if not metrics:
     raise ValueError(f"{run_dir} holds no training steps yet")
   return config, metrics, evals

@@ -27,7 +27,7 @@ import jax.numpy as jnp
 import optax
 from flax import struct
 
-from discosyn_jax import networks
+from discosyn_jax import networks, policy
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.networks import DiscoSyn, gaussian_entropy, gaussian_log_prob
 
@@ -43,16 +43,6 @@ class Samples:
   target: jax.Array  # value target
 
 
-def joint_log_prob(model: DiscoSyn, params, task: int, obs, z, action):
-  """log pi(z|s,task) + log p(a|z), and the two log stds (for the entropies)."""
-  z_mean, z_log_std = model.apply(params, task, obs, method=DiscoSyn.policy)
-  log_prob = gaussian_log_prob(z, z_mean, z_log_std)
-  a_mean, a_log_std = model.apply(params, z, method=DiscoSyn.decode)
-  if a_log_std is not None:
-    log_prob = log_prob + gaussian_log_prob(action, a_mean, a_log_std)
-  return log_prob, z_log_std, a_log_std
-
-
 def discriminator_log_prob(model: DiscoSyn, params, z, action):
   """log q(z | a)."""
   mean, log_std = model.apply(params, action, method=DiscoSyn.discriminate)
@@ -60,7 +50,7 @@ def discriminator_log_prob(model: DiscoSyn, params, z, action):
 
 
 def task_loss(model: DiscoSyn, params, task: int, s: Samples, config: TrainConfig):
-  log_prob, z_log_std, a_log_std = joint_log_prob(model, params, task, s.obs, s.z, s.action)
+  log_prob, z_log_std, a_log_std = policy.log_prob(model, params, task, s.obs, s.z, s.action)
   ratio = jnp.exp(log_prob - s.log_prob)
   adv = (s.advantage - s.advantage.mean()) / (s.advantage.std() + 1e-8)
   clipped = jnp.clip(ratio, 1 - config.clip_epsilon, 1 + config.clip_epsilon)
@@ -121,8 +111,9 @@ def optimizer(config: TrainConfig) -> optax.GradientTransformation:
   def labels(params):
     def label(name):
       kind = networks.role(name)
-      return "frozen" if kind == "decoder" and config.freeze_decoder else (
-          "policy" if kind == "decoder" else kind)
+      if kind == "decoder" and config.freeze_decoder:
+        return "frozen"
+      return "discriminator" if kind == "discriminator" else "policy"  # one PPO objective
     return {"params": {name: jax.tree.map(lambda _: label(name), sub)
                        for name, sub in params["params"].items()}}
 

@@ -12,6 +12,11 @@ def run_episode(env, keys, policy, steps=None, seed: int = 7):
   policy(t, key, batch) -> (batch, 20) actions. Returns (the reset state, the per-step
   states stacked along a leading time axis); no auto-reset: a terminated env keeps stepping.
   """
+  return episode_fn(env, policy, steps, seed)(keys)
+
+
+def episode_fn(env, policy, steps=None, seed: int = 7):
+  """`run_episode` as a jitted function of the reset keys (to compile apart: `discosyn demo`)."""
   steps = steps or env.episode_length
 
   @jax.jit
@@ -27,4 +32,4 @@ def run_episode(env, keys, policy, steps=None, seed: int = 7):
     _, states = jax.lax.scan(body, (state, jax.random.PRNGKey(seed)), jnp.arange(steps))
     return state, states
 
-  return go(keys)
+  return go

@@ -23,15 +23,8 @@ import shutil
 import socket
 import time
 
-from discosyn_jax import atomic, checkpoints
+from discosyn_jax import atomic, checkpoints, layout
 
-CONFIG_FILE = "config.json"
-LOCK = "writer.lock"
-ASIDE = "replaced"  # the run --force replaces, until the new one has a checkpoint
-# what a run of this product holds besides its config: --force replaces a folder only if
-# it holds config.json and one of these (a config.json alone may be anyone's)
-RUN_NAMES = frozenset({"metrics.jsonl", "eval.jsonl", "tb", checkpoints.PERIODIC,
-                       checkpoints.FINAL, "plots", LOCK, ASIDE})
 _TRIES = 20  # a reader's probe holds the lock for microseconds: a writer tries again
 
 
@@ -42,12 +35,12 @@ class Busy(ValueError):
 def is_run(folder: pathlib.Path) -> bool:
   """Whether `folder` holds a run this product made (config.json and another of its names)."""
   folder = pathlib.Path(folder)
-  return (folder / CONFIG_FILE).is_file() and any((folder / n).exists() for n in RUN_NAMES)
+  return (folder / layout.CONFIG_FILE).is_file() and any((folder / n).exists() for n in layout.RUN_NAMES)
 
 
 def contents(folder: pathlib.Path) -> list[pathlib.Path]:
   """What a folder holds besides its writer's lock."""
-  return [p for p in pathlib.Path(folder).iterdir() if p.name != LOCK]
+  return [p for p in pathlib.Path(folder).iterdir() if p.name != layout.LOCK]
 
 
 def _describe(text: str) -> str:
@@ -62,7 +55,7 @@ def writer_of(run_dir: pathlib.Path) -> str | None:
   """Who writes the run now ("process N on HOST, started T"), None when no one does.
   Writes nothing: a read-only run can be asked."""
   try:
-    fd = os.open(pathlib.Path(run_dir) / LOCK, os.O_RDONLY)
+    fd = os.open(pathlib.Path(run_dir) / layout.LOCK, os.O_RDONLY)
   except OSError:
     return None
   try:
@@ -118,7 +111,7 @@ class Writer:
     return self
 
   def _lock(self) -> None:
-    path, holder = self.run_dir / LOCK, ""
+    path, holder = self.run_dir / layout.LOCK, ""
     for _ in range(_TRIES):
       fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
       try:
@@ -150,7 +143,7 @@ class Writer:
   def __exit__(self, *exc) -> None:
     if self._fd is not None:
       try:
-        os.unlink(self.run_dir / LOCK)
+        os.unlink(self.run_dir / layout.LOCK)
       except OSError:  # a folder made read-only meanwhile: the next writer takes it over
         pass
       os.close(self._fd)
@@ -163,10 +156,10 @@ class Writer:
     self.new = True
     try:
       if replace and contents(self.run_dir):
-        moving = atomic.sibling(self.run_dir / ASIDE, atomic.NEW)
+        moving = atomic.sibling(self.run_dir / layout.ASIDE, atomic.NEW)
         moving.mkdir()
         _move_all(self.run_dir, moving)
-        os.rename(moving, self.run_dir / ASIDE)
+        os.rename(moving, self.run_dir / layout.ASIDE)
       write_config()
     except OSError as err:
       self.undo()
@@ -176,13 +169,13 @@ class Writer:
   def keep(self) -> None:
     """The new run has a good checkpoint: the run it replaces goes."""
     if self.new and not self.kept:
-      atomic.remove_dir(self.run_dir / ASIDE)
+      atomic.remove_dir(self.run_dir / layout.ASIDE)
       self.kept = True
 
   def undo(self) -> bool:
     """A new run that ended before its first good checkpoint leaves no trace: what it wrote
     goes, a run it was replacing comes back. Whether there was one."""
-    if not atomic.sibling(self.run_dir / ASIDE, atomic.NEW).exists():  # else all is the old run's
+    if not atomic.sibling(self.run_dir / layout.ASIDE, atomic.NEW).exists():  # else all is the old run's
       _remove_new(self.run_dir)
     return settle(self.run_dir, warn=lambda _: None)
 
@@ -190,7 +183,7 @@ class Writer:
 def take_over(run_dir: pathlib.Path) -> None:
   """Settle what a dead writer left in `run_dir` (its lock, a replacement cut short), as a
   writer does first: for a caller that reads the run's config before it writes."""
-  left = (LOCK, ASIDE, ASIDE + atomic.NEW)
+  left = (layout.LOCK, layout.ASIDE, layout.ASIDE + atomic.NEW)
   if any((pathlib.Path(run_dir) / name).exists() for name in left):
     with Writer(run_dir):
       pass
@@ -199,13 +192,13 @@ def take_over(run_dir: pathlib.Path) -> None:
 def _remove_new(run_dir: pathlib.Path) -> None:
   """Remove what a new run wrote: all but the lock and a run set aside."""
   for path in contents(run_dir):
-    if path.name not in (ASIDE, ASIDE + atomic.NEW):
+    if path.name not in (layout.ASIDE, layout.ASIDE + atomic.NEW):
       shutil.rmtree(path) if path.is_dir() else path.unlink()
 
 
 def _move_all(source: pathlib.Path, target: pathlib.Path) -> None:
   for path in source.iterdir():
-    if path.name not in (LOCK, target.name):
+    if path.name not in (layout.LOCK, target.name):
       os.rename(path, target / path.name)
 
 
@@ -217,7 +210,7 @@ def settle(run_dir: pathlib.Path, warn=checkpoints.warn) -> bool:
   While RUN/replaced.new exists, everything in it and in RUN is the old run's (the move
   aside, or back, was cut short); RUN/replaced holds the old run whole."""
   run_dir = pathlib.Path(run_dir)
-  aside, moving = run_dir / ASIDE, atomic.sibling(run_dir / ASIDE, atomic.NEW)
+  aside, moving = run_dir / layout.ASIDE, atomic.sibling(run_dir / layout.ASIDE, atomic.NEW)
   shutil.rmtree(atomic.sibling(aside, atomic.TRASH), ignore_errors=True)
   if aside.is_dir():
     if checkpoints.latest(run_dir, warn=lambda _: None) is not None:

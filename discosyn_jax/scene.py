@@ -9,7 +9,6 @@ from discosyn_jax import assets
 # Where the forearm (the hand's fixed root) is mounted: position and xyaxes in the world.
 # Palm down (hand.xml's own pose): the palm-frame point (0.011, 0, 0.11), the middle of the
 # knuckle line, lies at world (0, 0, 0.225) and the palm faces -z.
-PALM_DOWN = ((0.011, -0.4, 0.225), (-1, 0, 0, 0, 0, 1))
 # Palm up, for objects that rest on the palm: the same knuckle point, the palm facing +z
 # (palm x -> world +x, palm y -> world -z); the palm's surface is at world z 0.2361.
 PALM_UP = ((-0.011, -0.4, 0.225), (1, 0, 0, 0, 0, -1))

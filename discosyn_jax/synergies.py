@@ -198,9 +198,9 @@ def read(path: str | pathlib.Path) -> tuple[dict[str, Any], dict]:
   """(meta with the decoder's config fields, decoder params) of a synergy file or a run."""
   path = pathlib.Path(path)
   if path.is_dir():
-    from discosyn_jax import checkpoints, loop
+    from discosyn_jax import checkpoints, run_folder
 
-    config, _, flat = loop.read_run(path, lambda c: checkpoints.read_arrays(c, _RUN_DECODER))
+    config, _, flat = run_folder.read_run(path, lambda c: checkpoints.read_arrays(c, _RUN_DECODER))
     if config.decoder == "identity":
       raise ValueError(f"{path} is a full-action run: it has no synergy decoder")
     meta = {k: getattr(config, k) for k in ARCHITECTURE}
@@ -255,6 +255,12 @@ def _check_file(path, meta, flat: dict) -> None:
                        f"for that decoder")
 
 
+def starting_decoder(config) -> dict | None:
+  """The decoder params a fresh run of `config` starts from: its `decoder_from`, else None
+  (the Trainer's random initialisation)."""
+  return load_decoder(config.decoder_from, config) if config.decoder_from else None
+
+
 def load_decoder(path, config) -> dict:
   """The decoder params of `path` for a run of `config`; ValueError in one line when the
   decoder is not the one the config describes."""
@@ -295,5 +301,6 @@ def frozen_fields(meta: dict[str, Any], path) -> dict[str, Any]:
   decoder entropy (constants here). Fitted PCA / autoencoder spaces act with their mean
   (no noise outside the space); a DiscoSyn decoder keeps the noise it learned."""
   return dict(architecture(meta), decoder_from=str(pathlib.Path(path).resolve()),
-              freeze_decoder=True, decoder_noise="method" not in meta, alpha2=0.0, alpha3=0.0)
+              freeze_decoder=True, decoder_noise="method" not in meta, alpha2=0.0, alpha3=0.0,
+              decoder_weight_decay=0.0, decoder_weight_decay_steps=0)
 

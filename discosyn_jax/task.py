@@ -82,7 +82,7 @@ class Task(abc.ABC):
     """Look up the indices the pure functions need (called once, on the host)."""
 
   @abc.abstractmethod
-  def initial_state(self, rng: jax.Array, model: mujoco.MjModel) -> tuple[jax.Array, jax.Array, Info]:
+  def initial_state(self, rng: jax.Array) -> tuple[jax.Array, jax.Array, Info]:
     """(qpos, qvel, info) of a fresh episode."""
 
   @abc.abstractmethod

@@ -30,9 +30,9 @@ from flax import struct
 from jax.sharding import PartitionSpec as P
 
 from discosyn_jax import devices as devices_lib
-from discosyn_jax import diagnostics, networks, ppo, wrappers
+from discosyn_jax import diagnostics, evaluation, networks, policy, ppo, wrappers
 from discosyn_jax.config import TrainConfig
-from discosyn_jax.networks import DiscoSyn, gaussian_log_prob
+from discosyn_jax.networks import DiscoSyn
 
 
 @struct.dataclass
@@ -45,25 +45,19 @@ class TrainState:
   step: jax.Array  # int32: train steps done
 
 
-def make_envs(config: TrainConfig) -> list[Env]:
-  import tasks
-
-  return [tasks.make(name, backend=config.backend, physics=config.physics)
-          for name in config.tasks]
-
-
 class Trainer:
   """Builds the module, the optimiser and the jitted functions for one config.
 
-  `envs` defaults to the registered tasks; any Brax-style env with `episode_length`, a
-  `success` metric and actions in [-1, 1] works (the tests use a tiny one). `devices`
+  `envs`, one per task of the config, are built by the caller (`tasks.trainer(config)` for
+  the registered tasks): any Brax-style env with `episode_length`, a `success` metric and
+  actions in [-1, 1] works (the tests use a tiny one). `devices`
   (a list, a count, or None for all) holds the mesh the env batch is split over.
   """
 
-  def __init__(self, config: TrainConfig, envs: Sequence[Env] | None = None, devices=None):
+  def __init__(self, config: TrainConfig, envs: Sequence[Env], devices=None):
     self.config = config.validate()
     self.mesh = devices_lib.mesh_for(config, devices)
-    self.envs = list(envs) if envs is not None else make_envs(config)
+    self.envs = list(envs)
     if len(self.envs) != len(config.tasks):
       raise ValueError(f"{len(self.envs)} envs given for {len(config.tasks)} tasks")
     sizes = {env.action_size for env in self.envs}
@@ -74,7 +68,7 @@ class Trainer:
     self.model = networks.build(config, self.obs_sizes, self.action_size)
     self.optimizer = ppo.optimizer(config)
     self._train = [wrappers.for_training(env, config.reset_pool) for env in self.envs]
-    self._eval = [wrappers.for_evaluation(env) for env in self.envs]
+    self.eval_envs = [wrappers.for_evaluation(env) for env in self.envs]  # evaluate.py
     self._fresh_state = jax.jit(self._initial_state)
     self._fresh_params = jax.jit(self._init_params)
     # the span the tasks plant, if they do (tasks/planted.py): what the decoder should find
@@ -85,9 +79,10 @@ class Trainer:
                                                     planted=self.planted_span))
                           if self.model.has_discriminator else None)
     self.train_step = jax.jit(self._train_step, donate_argnums=0)
-    self.evaluate = jax.jit(self._evaluate)
-    # the evaluation's episodes of one task, with their states: `discosyn render`
-    self.episodes = jax.jit(self._episodes, static_argnames=("task", "episodes", "keep_states"))
+    # the deterministic policy's evaluation, and its episodes of one task (evaluation.py)
+    self.evaluate = jax.jit(functools.partial(evaluation.returns, self))
+    self.episodes = jax.jit(functools.partial(evaluation.episodes, self),
+                            static_argnames=("task", "episodes", "keep_states"))
 
   # -- state -----------------------------------------------------------------
   def init(self, seed: int | None = None, decoder_params=None) -> TrainState:
@@ -134,35 +129,20 @@ class Trainer:
         env_states=jax.tree.map(lambda x: batched if x.size else replicated, state.env_states))
 
   # -- acting ----------------------------------------------------------------
-  def _normalize(self, obs, norm):
+  def normalize(self, obs, norm):
     if not self.config.normalize_observations:
       return obs
     return running_statistics.normalize(obs, norm, max_abs_value=10.0)
 
   def act(self, params, task: int, obs, key=None):
-    """(z, a, log pi(z, a | s)) for normalised `obs`; the means when `key` is None."""
+    """(z, a, log pi(z, a | s)) for normalised `obs`; the means (and no log-prob) when
+    `key` is None."""
     if key is None:
-      z_mean, _ = self.model.apply(params, task, obs, method=DiscoSyn.policy)
-      return z_mean, self.model.apply(params, z_mean, method=DiscoSyn.decode)[0], None
-    return self._sample(params, task, obs, self._noise(key, obs.shape[0]))
+      return (*policy.deterministic(self.model, params, task, obs), None)
+    return policy.sample(self.model, params, task, obs, self._noise(key, obs.shape[0]))
 
   def _noise(self, key, batch: int):
-    """The standard normal draws behind z and a, drawn apart from the networks so that a
-    rollout split over devices uses the numbers one device would."""
-    z_key, a_key = jax.random.split(key)
-    return (jax.random.normal(z_key, (batch, self.model.n_synergies)),
-            jax.random.normal(a_key, (batch, self.action_size)))
-
-  def _sample(self, params, task: int, obs, noise):
-    z_noise, a_noise = noise
-    z_mean, z_log_std = self.model.apply(params, task, obs, method=DiscoSyn.policy)
-    z = z_mean + jnp.exp(z_log_std) * z_noise
-    log_prob = gaussian_log_prob(z, z_mean, z_log_std)
-    a_mean, a_log_std = self.model.apply(params, z, method=DiscoSyn.decode)
-    if a_log_std is None:
-      return z, a_mean, log_prob
-    a = a_mean + jnp.exp(a_log_std) * a_noise
-    return z, a, log_prob + gaussian_log_prob(a, a_mean, a_log_std)
+    return policy.noise(key, batch, self.model.n_synergies, self.action_size)
 
   def _unroll(self, params, norm, env_state, key, task: int):
     """`unroll_length` steps of every env: under shard_map, each device its own envs."""
@@ -179,7 +159,7 @@ class Trainer:
 
     def step(env_state, noise):
       obs = env_state.obs
-      z, a, log_prob = self._sample(params, task, self._normalize(obs, norm), noise)
+      z, a, log_prob = policy.sample(self.model, params, task, self.normalize(obs, norm), noise)
       env_state = env.step(env_state, a)
       info = env_state.info
       out = dict(obs=obs, z=z, action=a, log_prob=log_prob, reward=env_state.reward,
@@ -202,14 +182,14 @@ class Trainer:
       norm = state.normalizers[n]
       if cfg.normalize_observations:
         norm = running_statistics.update(norm, traj["obs"].reshape(-1, traj["obs"].shape[-1]))
-      obs = self._normalize(traj["obs"], norm)
+      obs = self.normalize(traj["obs"], norm)
       reward = traj["reward"] * cfg.reward_scaling
       log_q = jnp.zeros_like(reward)
       if self.model.has_discriminator:
         log_q = ppo.discriminator_log_prob(self.model, params, traj["z"], traj["action"])
         reward = reward + cfg.alpha2 * log_q
       value = self.model.apply(params, n, obs, method=DiscoSyn.value)
-      bootstrap = self.model.apply(params, n, self._normalize(env_state.obs, norm),
+      bootstrap = self.model.apply(params, n, self.normalize(env_state.obs, norm),
                                    method=DiscoSyn.value)
       target, advantage = gae(reward, value, bootstrap, traj["done"], traj["truncation"], cfg)
       flat = lambda x: x.reshape((-1,) + x.shape[2:])
@@ -264,52 +244,6 @@ class Trainer:
         epoch, (params, opt_state), jax.random.split(key, cfg.update_epochs))
     return params, opt_state, jax.tree.map(jnp.mean, metrics)
 
-  # -- evaluation -----------------------------------------------------------
-  def _episodes(self, params, normalizers, key, task: int, episodes: int, keep_states: bool = False):
-    """`episodes` deterministic episodes (head mean, decoder mean) of one task, in parallel:
-    per step z, action, reward and `alive` (1 until the episode's end, that step included),
-    and the env state after the step when `keep_states` (videos); per episode its return and
-    final success."""
-    env = self._eval[task]
-    state = env.reset(jax.random.split(key, episodes))
-    zeros = jnp.zeros(episodes)
-
-    def step(carry, _):
-      state, alive, ret, success = carry
-      z, a, _ = self.act(params, task, self._normalize(state.obs, normalizers[task]))
-      state = env.step(state, a)
-      ret = ret + alive * state.reward
-      ended = alive * state.done
-      success = jnp.where(ended > 0, state.metrics["success"], success)
-      out = dict(z=z, action=a, reward=state.reward, alive=alive)
-      if keep_states:
-        out["state"] = state
-      return (state, alive * (1 - state.done), ret, success), out
-
-    (_, _, ret, success), traj = jax.lax.scan(
-        step, (state, jnp.ones_like(zeros), zeros, zeros), None,
-        length=self.envs[task].episode_length)
-    return traj, ret, success
-
-  def _evaluate(self, params, normalizers, key):
-    """{task: {"return", "success"}} of the deterministic policy, averaged over `eval_envs`
-    episodes per task."""
-    out = {}
-    for n, name in enumerate(self.config.tasks):
-      key, sub = jax.random.split(key)
-      _, ret, success = self._episodes(params, normalizers, sub, n, self.config.eval_envs)
-      out[name] = {"return": ret.mean(), "success": success.mean()}
-    return out
-
-  def rollouts(self, params, normalizers, key, episodes: int):
-    """{task: per-step arrays (steps, episodes, ...) of z, action, reward, alive} of the
-    deterministic policy: what the sequential baselines fit and the t-SNE shows."""
-    keys = jax.random.split(key, len(self.envs))
-    return {name: jax.device_get(self.episodes(params, normalizers, keys[n], task=n,
-                                               episodes=episodes)[0])
-            for n, name in enumerate(self.config.tasks)}
-
-
 def split_seed_key(key, n_tasks: int):
   """(the state's rng, the parameters' key, a reset key per task): what `Trainer.init` draws
   from the key of its seed."""
@@ -317,7 +251,7 @@ def split_seed_key(key, n_tasks: int):
   return key, init_key, env_keys
 
 
-def initial_decoder(config: TrainConfig, action_size: int):
+def random_decoder(config: TrainConfig, action_size: int):
   """The random decoder parameters a run of `config` starts from, without building its envs:
   the decoder's initialisation draws from its own path in the module, whatever the
   observation sizes of the heads (tests/test_discovery.py checks it)."""
@@ -362,8 +296,7 @@ def _grad_norms_by_role(grads) -> dict[str, jax.Array]:
   means and stds), the value heads, the decoder, the discriminator."""
   parts: dict[str, list] = {}
   for name, sub in grads["params"].items():
-    part = "values" if name.startswith("values_") else networks.role(name)
-    parts.setdefault("heads" if part == "policy" else part, []).append(sub)
+    parts.setdefault(networks.role(name), []).append(sub)
   return {f"grad_norm/{part}": optax.tree.norm(subs) for part, subs in parts.items()}
 
 

@@ -157,9 +157,9 @@ def bench_row(config, args) -> dict:
   """Every figure of one backend and batch: see the module docstring."""
   import jax
 
-  from discosyn_jax.train import Trainer
+  import tasks
 
-  trainer = Trainer(config, devices=args.devices) if args.train else None
+  trainer = tasks.trainer(config, devices=args.devices) if args.train else None
   envs = trainer.envs if trainer else _envs(config)
   clock = CallbackClock(envs)
   T, B = config.unroll_length, config.num_envs
@@ -210,9 +210,9 @@ def bench_row(config, args) -> dict:
 
 
 def _envs(config):
-  from discosyn_jax.train import make_envs
+  import tasks
 
-  return make_envs(config)
+  return tasks.make_envs(config)
 
 
 def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.ArgumentParser:

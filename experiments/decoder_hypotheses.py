@@ -24,7 +24,7 @@ import discosyn_jax  # noqa: E402
 discosyn_jax.setup_jax()  # the compile cache; MJX imported quietly
 
 from discosyn_jax import config as config_lib  # noqa: E402
-from discosyn_jax import logs, loop  # noqa: E402
+from discosyn_jax import layout, logs, loop, run_folder  # noqa: E402
 from experiments import presets  # noqa: E402
 
 # variant -> TrainConfig changes to set1-disco3-linear (one hypothesis each)
@@ -44,10 +44,10 @@ VARIANTS = {
 def summary(out: pathlib.Path) -> str:
   lines = ["| run | env steps | valve0 | valve1 | valve2 | valve3 | mean | W change | cosines |",
            "|---|---|---|---|---|---|---|---|---|"]
-  for run in sorted(p for p in out.iterdir() if (p / loop.CONFIG_FILE).is_file()):
-    config = config_lib.load(run / loop.CONFIG_FILE)
-    evals = logs.read_log(run / logs.EVAL_FILE)
-    metrics = logs.read_log(run / logs.METRICS_FILE)
+  for run in sorted(p for p in out.iterdir() if (p / layout.CONFIG_FILE).is_file()):
+    config = config_lib.load(run / layout.CONFIG_FILE)
+    evals = logs.read_log(run / layout.EVAL_FILE)
+    metrics = logs.read_log(run / layout.METRICS_FILE)
     if not evals:
       continue
     final = evals[-1]
@@ -83,8 +83,8 @@ def main(argv=None):
       config = base.replace(seed=seed, steps=args.steps, eval_every=args.eval_every,
                             checkpoint_every=args.eval_every, **VARIANTS[variant]).validate()
       run = out / f"{variant}-seed{seed}"
-      if not loop.finished(run, config):
-        loop.train(config, run, resume=(run / loop.CONFIG_FILE).is_file(), progress=False)
+      if not run_folder.finished(run, config):
+        loop.train(config, run, resume=(run / layout.CONFIG_FILE).is_file(), progress=False)
   print(summary(out))
 
 

@@ -8,7 +8,9 @@
                          learned decoder's singular values, bias and noise (isolates the
                          subspace from its scale and offset; read from the DiscoSyn run)
   discosyn-planted /     the same on the planted-synergy test bed (tasks/planted.py, b = 3):
-    -planted_slack       one adequate subspace / many; not part of `all`
+    -planted_slack       one adequate subspace / many; not part of `all`. Also DiscoSyn3-L
+                         with the annealed decoder weight decay (DiscoSyn3-L-wd8a200, the
+                         `-decay` preset) and its Random3-L-matched-wd8a200 control
   baselines-set1 / -set2 the sequential baseline: independent full-action PPO per task (one
                          run, one head and one value net per task, no shared parameters),
                          its deterministic actions collected, PCA and an autoencoder fitted
@@ -18,13 +20,16 @@
                          for the two valves, set #2's DiscoSyn6-L for the top-down screw),
                          beside full-action PPO from scratch on the same tasks and budget
   sparse                 the sparse goal valve: frozen set-#1 synergies, a frozen random
-                         decoder of the same size, full-action PPO
+                         decoder of the same size (z bounded, and z free), full-action PPO
   all                    every one of them
 
 Every step writes into its own folder of OUT (`<method>-<set>-seed<n>`). A step whose folder
 holds a finished run of the same config is kept; an unfinished one is resumed, so an
 interrupted `all` is continued by running it again. Each run folder gets an
 `experiment.json` (experiment, method, set, seed, scale) that `discosyn report` reads.
+
+One file over 300 lines on purpose: the steps (Train, Fit, Match) and the plans built from
+them are read together, as the plan of an experiment is its list of steps.
 """
 
 from __future__ import annotations
@@ -37,14 +42,15 @@ from typing import Any, Callable
 import jax
 import numpy as np
 
-from discosyn_jax import loop, report, synergies
+import tasks
+from discosyn_jax import evaluation, layout, loop, run_folder, synergies
 from discosyn_jax.config import TrainConfig
-from experiments import presets
+from experiments import presets, report_runs
 
-TASK_SETS = {"set1": presets.SET1, "set2": presets.SET2,
-             "unseen-set1": ("valve_cylinder", "valve_cw"), "unseen-set2": ("screw_topdown",),
-             "sparse": ("valve_goal",), "planted": presets.PLANTED,
-             "planted_slack": presets.PLANTED_SLACK}
+# the task sets of tasks/sets.py, the unseen tasks split by the set whose synergies they take
+TASK_SETS = {**{name: tasks.TASK_SETS[name] for name in ("set1", "set2", "sparse", "planted",
+                                                         "planted_slack")},
+             "unseen-set1": ("valve_cylinder", "valve_cw"), "unseen-set2": ("screw_topdown",)}
 DISCOSYN_SIZES = {"set1": (3, 4), "set2": (4, 6), "planted": (3,), "planted_slack": (3,)}
 BASELINES = (("PCA", 4), ("AE", 4), ("PCA", 6), ("AE", 6))  # trained in, as in the paper
 FITTED_SIZES = (3, 4, 6)  # explained variance reported for these
@@ -88,14 +94,14 @@ class Train:
   needs: tuple[str, ...] = ()  # the steps whose folders this one reads
 
   def done(self, out: pathlib.Path) -> bool:
-    return loop.finished(out / self.name, self.config)
+    return run_folder.finished(out / self.name, self.config)
 
   def run(self, out: pathlib.Path, make_trainer, progress: bool, log) -> None:
     run_dir = out / self.name
-    resume = (run_dir / loop.CONFIG_FILE).is_file()
-    loop.train(self.config, run_dir, resume=resume, progress=progress,
-               trainer=make_trainer(self.config), log=log)
-    (run_dir / report.EXPERIMENT_FILE).write_text(json.dumps(self.meta, indent=1))
+    resume = (run_dir / layout.CONFIG_FILE).is_file()
+    loop.train(self.config, run_dir, make_trainer=make_trainer, resume=resume,
+               progress=progress, log=log)
+    (run_dir / layout.EXPERIMENT_FILE).write_text(json.dumps(self.meta, indent=1))
 
 
 @dataclasses.dataclass
@@ -113,13 +119,13 @@ class Fit:
     return (self.source,)
 
   def done(self, out: pathlib.Path) -> bool:
-    return (out / self.name / report.FIT_FILE).is_file()
+    return (out / self.name / report_runs.FIT_FILE).is_file()
 
   def run(self, out: pathlib.Path, make_trainer, progress: bool, log) -> None:
     trainer, state = loop.load_trained(out / self.source, make_trainer)
     config = trainer.config
     key = jax.random.PRNGKey(config.seed + 2)
-    rollouts = trainer.rollouts(state.params, state.normalizers, key, self.episodes)
+    rollouts = evaluation.rollouts(trainer, state.params, state.normalizers, key, self.episodes)
     per_task = synergies.applied_actions(rollouts)
     actions = np.concatenate(list(per_task.values()))
     folder = out / self.name
@@ -141,7 +147,7 @@ class Fit:
         variance[method][str(k)] = ev
         log(f"{self.name}: {method}{k} explains {ev:.1%} of the action variance")
     # written last: its presence marks the step done
-    (folder / report.FIT_FILE).write_text(json.dumps(variance, indent=1))
+    (folder / report_runs.FIT_FILE).write_text(json.dumps(variance, indent=1))
 
 
 def fitted_meta(method: str, k: int, hidden: tuple[int, ...]) -> dict[str, Any]:
@@ -169,9 +175,9 @@ class Match:
   def run(self, out: pathlib.Path, make_trainer, progress: bool, log) -> None:
     from discosyn_jax import train
 
-    config = loop.load_run(out / self.source)[0]
+    config = run_folder.load_run(out / self.source)[0]
     meta, learned = synergies.read(out / self.source)
-    start = train.initial_decoder(config, int(np.shape(learned["log_std"])[-1]))
+    start = train.random_decoder(config, int(np.shape(learned["log_std"])[-1]))
     synergies.save(out / self.name / self.FILE, synergies.in_subspace_of(learned, start),
                    meta, source=self.source)
     log(f"{self.name}: the learned decoder of {self.source} in its random initial subspace")
@@ -200,8 +206,8 @@ class Planner:
   def _folder(self, method: str, task_set: str) -> str:
     return f"{method.lower()}-{task_set}-seed{self.seed}"
 
-  def discosyn(self, task_set: str, b: int, kind: str) -> Train:
-    config = self._config(presets.preset(f"{task_set}-disco{b}-{kind}"), self.sets[task_set])
+  def discosyn(self, task_set: str, b: int, kind: str, variant: str = "") -> Train:
+    config = self._config(presets.preset(f"{task_set}-disco{b}-{kind}{variant}"), self.sets[task_set])
     method = synergies.method_name(config)
     return Train(self._folder(method, task_set), config,
                  _meta(f"discosyn-{task_set}", method, task_set, self.seed, self.scale))
@@ -210,7 +216,8 @@ class Planner:
     """The control of a DiscoSyn run (or a frozen learned space): the same config with its
     decoder frozen at its random initialisation (the decoder the DiscoSyn run of this seed
     starts from, whatever the tasks)."""
-    config = learned.config.replace(freeze_decoder=True, decoder_from="").validate()
+    config = learned.config.replace(freeze_decoder=True, decoder_from="", decoder_weight_decay=0.0,
+                                    decoder_weight_decay_steps=0).validate()
     method = synergies.method_name(config)
     label = task_set.removeprefix("unseen-")
     name = (f"{experiment}-random-seed{self.seed}" if label == experiment
@@ -228,7 +235,9 @@ class Planner:
       steps.append(Train(self._folder(method, task_set),
                          random.config.replace(squash_z=False).validate(), meta(method)))
     if learned.config.decoder == "linear":
-      method = f"{random.meta['method']}-matched"
+      # named after the learned run it copies: Random3-L-matched, Random3-L-matched-wd8a200
+      update = learned.meta["method"].removeprefix(f"DiscoSyn{learned.config.n_synergies}-L")
+      method = f"{random.meta['method']}-matched{update}"
       match = Match(self._folder(f"{method}-decoder", task_set), learned.name, meta("fit"))
       path = (self.out / match.name / Match.FILE).resolve()
       steps += [match, Train(self._folder(method, task_set),
@@ -279,10 +288,15 @@ class Planner:
                    needs=(source.name,) if source else ())
     scratch = self.ppo(task_set, experiment)
     scratch = dataclasses.replace(scratch, name=folder("ppo"))
-    control = None
-    if experiment == "sparse":  # the learned space against a random one of the same size
-      control = self.random_decoder(frozen, task_set, experiment)
-    return [step for step in (source, frozen, control, scratch) if step is not None]
+    controls = []
+    if experiment == "sparse":  # the learned space against a random one of the same size,
+      random = self.random_decoder(frozen, task_set, experiment)  # z bounded as it is,
+      controls = [random]
+      if random.config.squash_z:  # and z free: the stronger of the two is the control
+        method = f"{random.meta['method']}-zfree"
+        controls.append(Train(folder("random-zfree"), random.config.replace(squash_z=False),
+                              _meta(experiment, method, task_set, self.seed, self.scale)))
+    return [step for step in (source, frozen, *controls, scratch) if step is not None]
 
   def plan(self, experiment: str) -> list:
     if experiment == "all":
@@ -293,9 +307,13 @@ class Planner:
       return steps
     if experiment.startswith("discosyn-") and experiment[9:] in DISCOSYN_SIZES:
       task_set = experiment[9:]
-      runs = [self.discosyn(task_set, b, kind) for b in DISCOSYN_SIZES[task_set]
-              for kind in ("linear", "mlp")]
-      return [step for run in runs for step in (run, *self.controls(run, task_set, experiment))]
+      # the decayed variant where it is measured to work (docs/TRAINING_NOTES.md, issue 26)
+      kinds = (("linear", ""), ("mlp", "")) + (
+          (("linear", presets.DECAYED),) if task_set in presets.DECAYED_SETS else ())
+      runs = [self.discosyn(task_set, b, kind, variant) for b in DISCOSYN_SIZES[task_set]
+              for kind, variant in kinds]
+      steps = [step for run in runs for step in (run, *self.controls(run, task_set, experiment))]
+      return list({step.name: step for step in steps}.values())  # one Random<b>-L for both
     if experiment.startswith("baselines-") and experiment[10:] in DISCOSYN_SIZES:
       return self.baselines(experiment[10:])
     if experiment == "transfer":
@@ -336,7 +354,7 @@ def run(experiment: str, out: pathlib.Path, scale: str, seeds=None, *,
   if decoder_from and experiment not in ("transfer", "sparse"):
     raise ValueError(f"a decoder can be given to transfer and sparse only, not to {experiment}")
   if make_trainer is None:
-    from discosyn_jax.train import Trainer as make_trainer
+    from tasks import trainer as make_trainer
   out = pathlib.Path(out)
   if seeds is None:
     seeds = SCALES[scale].seeds if scale in SCALES else (0,)

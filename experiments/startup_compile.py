@@ -25,11 +25,11 @@ def measure(tasks: list[str], backend: str, pool: bool, num_envs: int) -> dict:
   import jax
 
   from discosyn_jax.config import TrainConfig
-  from discosyn_jax.train import Trainer
+  import tasks as registry
 
   config = TrainConfig(tasks=tuple(tasks), backend=backend, reset_pool=pool, num_envs=num_envs,
                        unroll_length=5, num_minibatches=2, update_epochs=1, steps=1)
-  trainer = Trainer(config)
+  trainer = registry.trainer(config)
   built = time.perf_counter()
   state = jax.block_until_ready(trainer.init())
   initialised = time.perf_counter()

@@ -25,7 +25,7 @@ import discosyn_jax  # noqa: E402
 discosyn_jax.setup_jax()  # the compile cache; MJX imported quietly
 
 from discosyn_jax import config as config_lib  # noqa: E402
-from discosyn_jax import logs, loop  # noqa: E402
+from discosyn_jax import layout, logs, loop, run_folder  # noqa: E402
 from experiments import presets  # noqa: E402
 
 TARGET = 0.8  # deterministic success that counts as learnt (issue 16)
@@ -42,11 +42,11 @@ def config_for(task: str, seed: int, eval_every: int) -> config_lib.TrainConfig:
 def summary(out: pathlib.Path) -> str:
   lines = [f"| run | first >= {TARGET:.0%} at env steps | best (env steps) | last evaluation | "
            "success every ~1 M env steps |", "|---|---|---|---|---|"]
-  runs = sorted(p for p in out.iterdir() if (p / logs.EVAL_FILE).is_file()) if out.is_dir() else []
+  runs = sorted(p for p in out.iterdir() if (p / layout.EVAL_FILE).is_file()) if out.is_dir() else []
   for run in runs:
-    config = config_lib.load(run / loop.CONFIG_FILE)
+    config = config_lib.load(run / layout.CONFIG_FILE)
     (task,) = config.tasks
-    evals = [(row["env_steps"], row[f"{task}/success"]) for row in logs.read_jsonl(run / logs.EVAL_FILE)]
+    evals = [(row["env_steps"], row[f"{task}/success"]) for row in logs.read_jsonl(run / layout.EVAL_FILE)]
     if not evals:
       continue
     first = next((f"{steps:,}" for steps, success in evals if success >= TARGET), "not reached")
@@ -79,8 +79,8 @@ def main(argv=None):
     for seed in args.seeds:
       config = config_for(task, seed, args.eval_every)
       run = out / f"{task}-seed{seed}"
-      if not loop.finished(run, config):
-        loop.train(config, run, resume=(run / loop.CONFIG_FILE).is_file(), progress=False,
+      if not run_folder.finished(run, config):
+        loop.train(config, run, resume=(run / layout.CONFIG_FILE).is_file(), progress=False,
                    stop_at=TARGET)
   print(summary(out))
 

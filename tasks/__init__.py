@@ -1,156 +1,20 @@
-"""The task registry: `make(name)` builds a task's environment; TASK_SETS groups them."""
+"""The tasks: one module per task, the registry that builds their environments
+(registry.py), and the task sets (sets.py).
 
-from __future__ import annotations
+`import tasks` is light: it holds TASK_SETS. Anything else (`tasks.make`, `tasks.trainer`,
+`tasks.REGISTRY`, ...) loads the registry, and with it JAX and MuJoCo, on first use.
+"""
 
-import dataclasses
-from typing import Callable
+import importlib
 
-import discosyn_jax  # sets XLA flags before jax is imported
+from tasks.sets import TASK_SETS
 
-discosyn_jax.setup_jax()  # before brax (env.py) imports MJX
-
-from brax.envs.base import Env  # noqa: E402
-
-from discosyn_jax.config import PHYSICS  # noqa: E402
-from discosyn_jax.env import HandEnv  # noqa: E402
-from discosyn_jax.task import Task, TaskConfig  # noqa: E402
-from tasks import dice, planted, screw, valve, valve_goal, weight_pull  # noqa: E402
+__all__ = ["TASK_SETS"]  # and, loaded on first use, the registry's names
 
 
-@dataclasses.dataclass(frozen=True)
-class Entry:
-  task: Callable[[TaskConfig], Task]  # for a pure-JAX env: the env's config, as it is
-  default_config: Callable[..., TaskConfig]
-  summary: str
-  # what `make` builds around the task: the hand on a physics backend, or a pure-JAX env
-  env: Callable[..., Env] = HandEnv
-
-
-def _planted(index: int, slack: bool) -> Entry:
-  what = "only the error inside the span counts" if slack else "the whole error counts"
-  return Entry(lambda config: config,  # the env is built from the config itself
-               lambda **kw: planted.default_config(index=index, slack=slack, **kw),
-               f"reach a posture in plane {index} of the planted 3-D span; {what}",
-               env=planted.PlantedEnv)
-
-
-REGISTRY: dict[str, Entry] = {
-    "valve0": Entry(valve.Valve, lambda **kw: valve.default_config(arms=0, **kw),
-                    "turn a bare vertical stem counter-clockwise"),
-    "valve1": Entry(valve.Valve, lambda **kw: valve.default_config(arms=1, **kw),
-                    "turn a one-armed (L) valve counter-clockwise"),
-    "valve2": Entry(valve.Valve, lambda **kw: valve.default_config(arms=2, **kw),
-                    "turn a two-armed (T) valve counter-clockwise"),
-    "valve3": Entry(valve.Valve, lambda **kw: valve.default_config(arms=3, **kw),
-                    "turn a three-armed valve counter-clockwise"),
-    # task set #2 (with valve3)
-    "dice": Entry(dice.Dice, dice.default_config,
-                  "palm up: turn a free cube about the palm normal to a goal angle"),
-    "weight_pull": Entry(weight_pull.WeightPull, weight_pull.default_config,
-                         "lift a weight by pulling up the rope tied to it"),
-    "screw": Entry(screw.Screw, screw.default_config,
-                   "roll a horizontal screwdriver with the fingers to drive it in"),
-    # unseen tasks (learned with a frozen synergy decoder)
-    "valve_cylinder": Entry(valve.Valve, lambda **kw: valve.default_config(shape="wheel", **kw),
-                            "turn a round wheel valve counter-clockwise"),
-    "valve_cw": Entry(valve.Valve, lambda **kw: valve.default_config(
-                          arms=3, direction=-1.0, success_turn=1.2, **kw),
-                      "turn the three-armed valve clockwise"),
-    "screw_topdown": Entry(screw.Screw, lambda **kw: screw.default_config(topdown=True, **kw),
-                           "drive an upright screwdriver in, clockwise from above"),
-    # the dice as first specified: any axis, within 0.1 rad, no shaping (solved by no method)
-    "dice_full": Entry(dice.Dice, lambda **kw: dice.default_config(
-                           goal_axis="any", goal_min_angle=0.4, success_angle=0.1,
-                           progress_scale=0.0, success_bonus=0.0, **kw),
-                       "palm up: turn a free cube to a random orientation (any axis, 0.1 rad)"),
-    # the sparse goal valve, and its dense twin for debugging
-    "valve_goal": Entry(valve_goal.GoalValve, valve_goal.default_config,
-                        "turn the three-armed valve to a goal angle; reward 1 near it, else 0"),
-    "valve_goal_dense": Entry(valve_goal.GoalValve, lambda **kw: valve_goal.default_config(dense=True, **kw),
-                              "valve_goal with a dense reward 1 - |error| / pi (debugging)"),
-    # the planted-synergy test bed (pure JAX, tasks/planted.py): one span, a plane per task
-    **{f"planted{n}": _planted(n, slack=False) for n in range(4)},
-    **{f"planted_slack{n}": _planted(n, slack=True) for n in range(4)},
-}
-
-# The "fast" physics profile: each task's cheapest setting that stayed within the tolerances
-# of the reference (4 ms x 10) in experiments/physics_study.py (docs/BENCHMARKS.md, "Physics
-# settings", 2026-12-02): 8 ms steps, the valves' contacts as stiff as at 4 ms (refsafe off;
-# the screws diverge or bounce so). A task not listed keeps the reference: weight_pull's rope
-# failed every cheaper setting, and the pure-JAX tasks have no physics.
-_EIGHT_MS = dict(n_substeps=5)
-_EIGHT_MS_STIFF = dict(n_substeps=5, refsafe=False)
-FAST: dict[str, dict] = {
-    **{name: _EIGHT_MS_STIFF for name in ("valve0", "valve1", "valve2", "valve3", "valve_cylinder",
-                                          "valve_cw", "valve_goal", "valve_goal_dense")},
-    **{name: _EIGHT_MS for name in ("dice", "dice_full", "screw", "screw_topdown")}}
-
-TASK_SETS: dict[str, tuple[str, ...]] = {
-    "set1": ("valve0", "valve1", "valve2", "valve3"),
-    # set #2's valve is valve3 itself, under its own name: one task, one set of statistics
-    "set2": ("dice", "valve3", "weight_pull", "screw"),
-    "unseen": ("valve_cylinder", "valve_cw", "screw_topdown"),
-    "sparse": ("valve_goal",),
-    "planted": tuple(f"planted{n}" for n in range(4)),
-    "planted_slack": tuple(f"planted_slack{n}" for n in range(4)),
-}
-
-
-def entry(name: str) -> Entry:
-  if name not in REGISTRY:
-    raise ValueError(f"unknown task {name!r}; known tasks: {', '.join(REGISTRY)}")
-  return REGISTRY[name]
-
-
-def make_config(name: str, **overrides) -> TaskConfig:
-  defaults = entry(name).default_config()
-  fields = {f.name for f in dataclasses.fields(defaults)}
-  unknown = sorted(set(overrides) - fields)
-  if unknown:
-    raise ValueError(f"task {name!r} has no setting {', '.join(unknown)}; "
-                     f"its settings: {', '.join(sorted(fields))}")
+def __getattr__(name: str):
+  registry = importlib.import_module("tasks.registry")  # (not `from tasks import`: it asks here)
   try:
-    return dataclasses.replace(defaults, **overrides)
-  except ValueError as err:
-    raise ValueError(f"task {name!r}: {err}") from None
-
-
-def physics_overrides(name: str, physics: str) -> dict:
-  """The task config fields that physics profile `physics` (config.PHYSICS) sets for task
-  `name`: none for "reference" (TaskConfig's own defaults: 4 ms x 10)."""
-  if physics not in PHYSICS:
-    raise ValueError(f"unknown physics {physics!r}; known: {', '.join(PHYSICS)}")
-  entry(name)
-  return dict(FAST.get(name, {})) if physics == "fast" else {}
-
-
-def make(name: str, *, backend: str = "auto", physics: str = "fast", **overrides) -> Env:
-  """The environment of task `name` on `backend` ("auto", "native" or "mjx"; a pure-JAX
-  task has none and ignores it), with the physics profile `physics` (config.PHYSICS).
-
-  `overrides` replace fields of the task's default config (e.g. frictionloss=0.2).
-  """
-  config = make_config(name, **{**physics_overrides(name, physics), **overrides})
-  try:
-    task = entry(name).task(config)
-  except ValueError as err:
-    raise ValueError(f"task {name!r}: {err}") from None
-  return entry(name).env(task, backend=backend)
-
-
-def expand(names) -> list[str]:
-  """Task names with every task set among them replaced by its tasks, in order."""
-  out = []
-  for name in names:
-    if name in TASK_SETS:
-      out += TASK_SETS[name]
-    elif name in REGISTRY:
-      out.append(name)
-    else:
-      raise ValueError(f"unknown task or task set {name!r}; tasks: {', '.join(REGISTRY)}; "
-                       f"sets: {', '.join(TASK_SETS)}")
-  return out
-
-
-def sets_of(name: str) -> list[str]:
-  return [s for s, names in TASK_SETS.items() if name in names]
+    return getattr(registry, name)
+  except AttributeError:
+    raise AttributeError(f"module 'tasks' has no attribute {name!r}") from None

@@ -98,7 +98,7 @@ class Dice(Task):
     self.dice_qpos, self.dice_qvel = common.joint_address(model, "dice")
     self.start_pos = self.hand.qpos0[self.dice_qpos:self.dice_qpos + 3]
 
-  def initial_state(self, rng, model):
+  def initial_state(self, rng):
     k_hand, k_axis, k_angle, k_sign = jax.random.split(rng, 4)
     if self.config.goal_axis == "z":
       axis = jnp.array([0.0, 0.0, 1.0])

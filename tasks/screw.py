@@ -68,7 +68,7 @@ class Screw(Task):
     self.screw_qpos, self.screw_qvel = common.joint_address(model, "screw")
     self.slide_qpos, _ = common.joint_address(model, "screw_slide")
 
-  def initial_state(self, rng, model):
+  def initial_state(self, rng):
     return self.hand.start_qpos(rng, self.config.hand_noise), self.hand.zero_qvel(), {}
 
   def angle(self, view: PhysicsView) -> jax.Array:

@@ -67,7 +67,7 @@ class Valve(Task):
     self.hand = common.HandJoints(model)
     self.valve_qpos, self.valve_qvel = common.joint_address(model, "valve")
 
-  def initial_state(self, rng, model):
+  def initial_state(self, rng):
     k_hand, k_valve = jax.random.split(rng)
     angle = jax.random.uniform(k_valve, (), minval=-jnp.pi, maxval=jnp.pi)
     qpos = self.hand.start_qpos(k_hand, self.config.hand_noise).at[self.valve_qpos].set(angle)

@@ -48,9 +48,9 @@ class GoalValve(valve.Valve):
                    "need 0 < threshold < goal_min_turn <= goal_max_turn <= pi, got "
                    f"{config.threshold}, {config.goal_min_turn}, {config.goal_max_turn}")
 
-  def initial_state(self, rng, model):
+  def initial_state(self, rng):
     k_start, k_turn, k_side = jax.random.split(rng, 3)
-    qpos, qvel, info = super().initial_state(k_start, model)
+    qpos, qvel, info = super().initial_state(k_start)
     turn = jax.random.uniform(k_turn, (), minval=self.config.goal_min_turn, maxval=self.config.goal_max_turn)
     side = jnp.where(jax.random.bernoulli(k_side) | (not self.config.both_ways), 1.0, -1.0)
     return qpos, qvel, {**info, "goal": common.wrap_angle(info["start_angle"] + side * turn)}

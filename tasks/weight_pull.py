@@ -66,7 +66,7 @@ class WeightPull(Task):
     sensor = model.sensor("handle_pos")
     self._handle = int(sensor.adr[0])  # handle_pos (3) then handle_axis (3)
 
-  def initial_state(self, rng, model):
+  def initial_state(self, rng):
     return self.hand.start_qpos(rng, self.config.hand_noise), self.hand.zero_qvel(), {}
 
   def lift(self, view: PhysicsView) -> jax.Array:

@@ -114,15 +114,16 @@ def main() -> int:
     except checkpoints.SaveFailed as err:
       print(f"save failed: {err}", file=sys.stderr)
       return 2
-  from discosyn_jax import cli, train
+  import tasks.registry
+  from discosyn import cli
   from experiments import presets
 
-  train.make_envs = toy_envs
+  tasks.registry.make_envs = toy_envs
   presets.preset = lambda name: TOY
   return cli.main(sys.argv[1:])
 
 
 if __name__ == "__main__":
-  from discosyn_jax import cli
+  from discosyn import cli
 
   cli.exit_with(main())  # as the `discosyn` command ends

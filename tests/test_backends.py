@@ -7,9 +7,10 @@ import mujoco
 import numpy as np
 import pytest
 
+import tasks
+
 from discosyn_jax import hand, physics
 from discosyn_jax.config import TrainConfig
-from discosyn_jax.train import Trainer
 from tests import helpers
 
 
@@ -92,7 +93,7 @@ def test_mjx_trainer_inits_and_trains_one_step():
   config = TrainConfig(tasks=("valve0",), n_synergies=3, decoder="linear", num_envs=2,
                        unroll_length=2, num_minibatches=1, update_epochs=1, steps=1,
                        eval_every=0, eval_envs=2, checkpoint_every=0, backend="mjx")
-  trainer = Trainer(config)
+  trainer = tasks.trainer(config)
   assert trainer.envs[0].backend == "mjx"
   state = trainer.init()
   assert trainer._fresh_state._cache_size() == 1  # built by one compiled function

@@ -1,6 +1,6 @@
 """`discosyn bench`: one row per backend and batch; bad input is exit 2."""
 
-from discosyn_jax import cli
+from discosyn import cli
 
 
 def test_bench_prints_a_physics_row_per_batch_and_profile(capsys):

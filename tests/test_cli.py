@@ -4,7 +4,7 @@ import argparse
 import subprocess
 import sys
 
-from discosyn_jax import cli
+from discosyn import cli, commands
 from experiments import presets
 from tests.helpers import ROOT
 
@@ -29,7 +29,7 @@ def test_every_flag_says_what_it_is_and_its_default():
 
 
 def test_help_lists_every_command_and_imports_no_jax():
-  code = ("import sys; from discosyn_jax import cli; print(cli.build_parser().format_help()); "
+  code = ("import sys; from discosyn import cli; print(cli.build_parser().format_help()); "
           "print('HEAVY', sorted({'jax', 'mujoco', 'brax', 'flax', 'matplotlib'} & set(sys.modules)))")
   out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
   assert out.returncode == 0, out.stderr
@@ -63,7 +63,7 @@ def test_demo_prints_a_row_per_task(capsys):
 
 def test_bad_input_is_one_line_and_exit_2():
   for argv in (["demo", "valve7"], ["demo", "valve1", "--batch", "0"]):
-    out = subprocess.run([sys.executable, "-m", "discosyn_jax.cli", *argv], capture_output=True,
+    out = subprocess.run([sys.executable, "-m", "discosyn", *argv], capture_output=True,
                          text=True, cwd=ROOT)
     assert out.returncode == 2
     errors = [l for l in out.stderr.splitlines() if l.startswith("discosyn: error:")]
@@ -76,10 +76,10 @@ def test_a_finished_run_ends_with_the_next_commands_filled_in(tmp_path):
 
   config = TrainConfig(tasks=("valve0", "valve3"), steps=40)
   results = {"valve0": {"success": 0.9, "return": 1.0}, "valve3": {"success": 0.2, "return": 0.0}}
-  text = cli.next_commands(tmp_path / "my run", 40, config, results)
+  text = commands.next_commands(tmp_path / "my run", 40, config, results)
   run = f"'{tmp_path / 'my run'}'"  # quoted: a folder name with a space still pastes
   assert f"discosyn synergies {run}" in text
   assert f"discosyn render {run} --task valve0" in text  # the best-solved task
   assert f"discosyn train --out {run} --resume --steps 80" in text
-  ppo = cli.next_commands(tmp_path, 40, config.replace(decoder="identity"), results)
+  ppo = commands.next_commands(tmp_path, 40, config.replace(decoder="identity"), results)
   assert "synergies" not in ppo

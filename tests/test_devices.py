@@ -42,7 +42,7 @@ def test_this_process_has_one_device_and_bad_counts_are_refused():
 
 
 def test_train_refuses_more_devices_than_there_are_before_making_the_run(tmp_path, capsys):
-  from discosyn_jax import cli
+  from discosyn import cli
 
   out = tmp_path / "run"
   assert cli.main(["train", "--devices", "2", "--out", str(out), "--no-progress"]) == 2

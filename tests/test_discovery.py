@@ -10,7 +10,8 @@ import optax
 import pytest
 
 import tasks
-from discosyn_jax import checkpoints, diagnostics, discovery, ppo, report, synergies, train
+from discosyn_jax import checkpoints, diagnostics, discovery, ppo, synergies, train
+from experiments import report
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.train import Trainer
 from experiments import paper, presets
@@ -51,8 +52,8 @@ def test_overlap_is_1_for_a_subspace_itself_0_for_orthogonal_ones_whatever_the_b
 
 # -- the planted test bed ----------------------------------------------------------
 def test_planted_tasks_are_registered_with_one_span_and_a_plane_each():
-  assert tasks.TASK_SETS["planted"] == presets.PLANTED == tuple(f"planted{n}" for n in range(4))
-  assert tasks.TASK_SETS["planted_slack"] == presets.PLANTED_SLACK
+  assert tasks.TASK_SETS["planted"] == tuple(f"planted{n}" for n in range(4))
+  assert presets.PRESETS["planted_slack-disco3-linear"].tasks == tasks.TASK_SETS["planted_slack"]
   envs = [tasks.make(name) for name in tasks.expand(["planted", "planted_slack"])]
   u = planted.span()
   np.testing.assert_allclose(u.T @ u, np.eye(3), atol=1e-6)
@@ -148,7 +149,7 @@ def test_the_initial_decoder_is_rebuilt_from_the_config_alone(decoder):
   config = TrainConfig(tasks=("a", "b"), n_synergies=3, decoder=decoder, seed=7,
                        decoder_hidden=(16, 16))
   from_trainer = make_trainer(config).initial_params()["params"]["synergy_decoder"]
-  rebuilt = train.initial_decoder(config, 20)
+  rebuilt = train.random_decoder(config, 20)
   jax.tree.map(np.testing.assert_array_equal, rebuilt, from_trainer)
   basis = discovery.initial_basis(config)
   expected = diagnostics.synergy_basis(make_trainer(config).model,
@@ -190,7 +191,7 @@ def test_the_controls_build_run_and_show_in_the_report(tmp_path):
   # the matched control ran the learned decoder's scale and bias in the random start's subspace
   read = lambda m: checkpoints.read_arrays(folder(m) / "final", DECODER)
   learned, used = read("DiscoSyn3-L"), read("Random3-L-matched")
-  start = train.initial_decoder(random, 20)["synergies"]["kernel"]
+  start = train.random_decoder(random, 20)["synergies"]["kernel"]
   np.testing.assert_allclose(used["synergies.bias"], learned["synergies.bias"], atol=1e-6)
   assert float(diagnostics.overlap(used["synergies.kernel"].T, start.T)) == pytest.approx(1, abs=1e-5)
   np.testing.assert_allclose(np.linalg.svd(used["synergies.kernel"], compute_uv=False),
@@ -220,3 +221,23 @@ def test_an_annealed_decay_falls_linearly_to_nothing_over_its_train_steps():
   np.testing.assert_allclose(shrink[:12], 2.0 * (1 - np.arange(12) / 12), atol=1e-5)
   assert shrink[12:] == [0.0, 0.0]  # off after its 3 train steps
   assert synergies.method_name(config) == "DiscoSyn3-L-wd2a3"
+
+
+def test_the_decayed_variant_is_planned_beside_the_papers_update_with_its_own_matched_control(tmp_path):
+  steps = paper.Planner(tmp_path, "ci", 0, {"planted_slack": ("a",)}).plan("discosyn-planted_slack")
+  plan = {s.meta["method"]: s for s in steps}
+  decayed = plan["DiscoSyn3-L-wd8a200"].config
+  assert (decayed.decoder_weight_decay, decayed.decoder_weight_decay_steps) == (8.0, 200)
+  assert decayed.replace(decoder_weight_decay=0.0, decoder_weight_decay_steps=0) == \
+      plan["DiscoSyn3-L"].config  # the paper's update otherwise
+  # one Random3-L for both (a frozen decoder is never decayed), a matched control for each
+  assert [s.meta["method"] for s in steps].count("Random3-L") == 1
+  assert plan["Random3-L-matched-wd8a200"].needs == (
+      "random3-l-matched-wd8a200-decoder-planted_slack-seed0",)
+  assert "DiscoSyn3-NL-wd8a200" not in plan  # the decay is measured on linear decoders only
+  hand = paper.Planner(tmp_path, "ci", 0).plan("discosyn-set1")  # not a row of the hand's tables
+  assert not any("wd" in s.meta["method"] for s in hand)
+  with pytest.raises(ValueError, match="a frozen decoder is not decayed"):
+    decayed.replace(freeze_decoder=True).validate()
+  with pytest.raises(ValueError, match="anneals a decoder_weight_decay"):
+    decayed.replace(decoder_weight_decay=0.0).validate()

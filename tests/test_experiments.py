@@ -3,7 +3,6 @@ PPO, collection, PCA / autoencoder fits, frozen-space training, transfer of a Di
 decoder, the sparse-reward comparison and the report."""
 
 import json
-import pathlib
 import shutil
 
 import jax
@@ -11,7 +10,9 @@ import numpy as np
 import pytest
 from sklearn.decomposition import PCA
 
-from discosyn_jax import checkpoints, cli, logs, loop, networks, report, synergies
+from discosyn import cli, commands
+from discosyn_jax import checkpoints, logs, loop, networks, run_folder, synergies
+from experiments import report, report_runs
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.train import Trainer, _episode_metrics
 from experiments import paper
@@ -174,10 +175,10 @@ def test_the_random_decoder_control_keeps_the_learned_runs_initial_decoder(exper
   control = experiments / "sparse-random-seed0"
   meta = json.loads((control / "experiment.json").read_text())
   assert meta["method"] == "Random3-L" and meta["experiment"] == "sparse"
-  config = loop.load_run(control)[0]
-  frozen = loop.load_run(experiments / "sparse-synergies-seed0")[0]
+  config = run_folder.load_run(control)[0]
+  frozen = run_folder.load_run(experiments / "sparse-synergies-seed0")[0]
   assert config == frozen.replace(decoder_from="")  # only the decoder's source differs
-  learned = loop.load_run(experiments / "discosyn3-l-set1-seed0")[0]
+  learned = run_folder.load_run(experiments / "discosyn3-l-set1-seed0")[0]
   start = make_trainer(learned).initial_params()["params"]["synergy_decoder"]
   trained = final_decoder(control)
   np.testing.assert_array_equal(trained["synergies.kernel"], start["synergies"]["kernel"])
@@ -251,7 +252,7 @@ def test_report_mean_and_spread_over_seeds(tmp_path):
     (run / "eval.jsonl").write_text(json.dumps(row) + "\n")
   (tmp_path / "report").mkdir()  # a report written beside the runs is passed over
   (tmp_path / "report" / "REPORT.md").write_text("an earlier report")
-  runs, _ = report.find([tmp_path])
+  runs, _ = report_runs.find([tmp_path])
   assert len(runs) == 2
   table = report.solved_tables(runs, threshold=0.7)
   assert "| DiscoSyn3-L | ✓ 75% (50%–100%) [2] (paper ✓) |" in table
@@ -260,7 +261,7 @@ def test_report_mean_and_spread_over_seeds(tmp_path):
   # a copy of a run (an ablation, a rerun) would count as a third seed: it is refused
   shutil.copytree(tmp_path / "run1", tmp_path / "more" / "run1-again")
   with pytest.raises(ValueError, match="both DiscoSyn3-L seed 1 on set1"):
-    report.find([tmp_path])
+    report_runs.find([tmp_path])
 
 
 def test_train_flag_decoder_from_sets_a_frozen_space(tmp_path):
@@ -268,13 +269,13 @@ def test_train_flag_decoder_from_sets_a_frozen_space(tmp_path):
   fields = dict(decoder="linear", n_synergies=4, decoder_bias=True, decoder_hidden=(128, 128))
   path = synergies.save(tmp_path / "pca4.npz", params, fields, method="PCA", explained_variance=ev)
   args = cli.build_parser().parse_args(["train", "--tasks", "valve_goal", "--decoder-from", str(path)])
-  config = cli.train_config(args)
+  config = commands.train_config(args)
   assert (config.decoder, config.n_synergies, config.freeze_decoder) == ("linear", 4, True)
   assert not config.decoder_noise and config.alpha2 == config.alpha3 == 0
   assert config.decoder_from == str(path.resolve()) and config.tasks == ("valve_goal",)
   args = cli.build_parser().parse_args(["train", "--decoder-from", str(path), "--synergies", "3"])
-  with pytest.raises(cli.UsageError, match="holds a linear decoder with 4 synergies"):
-    cli.train_config(args)
+  with pytest.raises(commands.UsageError, match="holds a linear decoder with 4 synergies"):
+    commands.train_config(args)
 
 
 def test_a_frozen_run_resumes_without_its_decoder_source(experiments, tmp_path):
@@ -284,12 +285,12 @@ def test_a_frozen_run_resumes_without_its_decoder_source(experiments, tmp_path):
   source = synergies.save(tmp_path / "pca4.npz", params, fields, method="PCA")
   config = TrainConfig(tasks=("a",), **{**paper.SCALES["ci"].train, "steps": 1},
                        **synergies.frozen_fields(synergies.read(source)[0], source))
-  loop.train(config, tmp_path / "run", trainer=make_trainer(config), progress=False, log=lambda *a: None)
+  loop.train(config, tmp_path / "run", make_trainer=make_trainer, progress=False, log=lambda *a: None)
   source.unlink()
   with pytest.raises(ValueError, match="does not exist"):
-    loop.initial_decoder(config)
+    synergies.starting_decoder(config)
   out = loop.train(config.replace(steps=2), tmp_path / "run", resume=True, progress=False,
-                   trainer=make_trainer(config.replace(steps=2)), log=lambda *a: None)
+                   make_trainer=make_trainer, log=lambda *a: None)
   assert int(out["state"].step) == 2
   np.testing.assert_array_equal(final_decoder(tmp_path / "run")["synergies.kernel"],
                                 params["synergies"]["kernel"])
@@ -320,6 +321,8 @@ def test_methods_run_with_the_runs_they_need(tmp_path):
       "discosyn3-l-set1-seed0", "sparse-synergies-seed0"]
   assert names(paper.select(plan("sparse"), ["Random3-L", "PPO"])) == [
       "sparse-random-seed0", "sparse-ppo-seed0"]
+  zfree = paper.select(plan("sparse"), ["Random3-L-zfree"])  # the control with z free too
+  assert names(zfree) == ["sparse-random-zfree-seed0"] and not zfree[0].config.squash_z
   # a run of one method is the same run as the whole experiment's (the same folder, config)
   whole = {s.name: s for s in plan("baselines-set1")}
   logs = []

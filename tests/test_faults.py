@@ -29,7 +29,10 @@ import numpy as np
 import pytest
 
 import tasks
-from discosyn_jax import atomic, checkpoints, cli, logs, loop, report, runs, train, videos
+import tasks.registry
+from discosyn import cli
+from discosyn_jax import atomic, checkpoints, layout, logs, loop, run_folder, videos
+from experiments import report_runs
 from discosyn_jax import config as config_lib
 from discosyn_jax.train import Trainer
 from tests.fault_worker import TOY, small_state, toy_envs
@@ -270,16 +273,16 @@ def test_a_checkpoint_of_the_release_before_manifests_is_still_read(tmp_path):
 def run_logs(run_dir: pathlib.Path) -> dict:
   """What a run logged, but for timings: JSONL rows and TensorBoard scalars."""
   strip = lambda rows: [{k: v for k, v in r.items() if k not in TIMING} for r in rows]
-  return {"metrics": strip(logs.read_jsonl(run_dir / logs.METRICS_FILE)),
-          "eval": strip(logs.read_jsonl(run_dir / logs.EVAL_FILE)),
-          "tb": {tag: values for tag, values in tensorboard_scalars(run_dir / logs.TENSORBOARD_DIR).items()
+  return {"metrics": strip(logs.read_jsonl(run_dir / layout.METRICS_FILE)),
+          "eval": strip(logs.read_jsonl(run_dir / layout.EVAL_FILE)),
+          "tb": {tag: values for tag, values in tensorboard_scalars(run_dir / layout.TENSORBOARD_DIR).items()
                  if tag.split("/")[-1] not in TIMING}}
 
 
 @pytest.fixture(scope="module")
 def unbroken(tmp_path_factory):
   run_dir = tmp_path_factory.mktemp("runs") / "unbroken"
-  result = loop.train(TOY, run_dir, trainer=toy_trainer(), progress=False, log=quiet)
+  result = loop.train(TOY, run_dir, make_trainer=lambda _: toy_trainer(), progress=False, log=quiet)
   return run_dir, result
 
 
@@ -288,7 +291,7 @@ def toy_tasks(monkeypatch):
   """The CLI's runs on the toy task, as tests/fault_worker.py runs them."""
   from experiments import presets
 
-  monkeypatch.setattr(train, "make_envs", toy_envs)
+  monkeypatch.setattr(tasks.registry, "make_envs", toy_envs)
   monkeypatch.setattr(presets, "preset", lambda name: TOY)
 
 
@@ -306,11 +309,11 @@ def test_a_run_killed_inside_a_save_and_mid_line_resumes_to_the_unbroken_runs_lo
   with pytest.MonkeyPatch.context() as patch:
     patch.setattr(atomic, "swap_in", killed_before_swapping_in_checkpoint_4)
     with pytest.raises(Killed):
-      loop.train(TOY, run_dir, trainer=toy_trainer(), progress=False, log=quiet)
-  with open(run_dir / logs.METRICS_FILE, "a") as f:  # and a line the kill cut short
+      loop.train(TOY, run_dir, make_trainer=lambda _: toy_trainer(), progress=False, log=quiet)
+  with open(run_dir / layout.METRICS_FILE, "a") as f:  # and a line the kill cut short
     f.write('{"step": 5, "loss": 0.2')
-  assert json.loads((run_dir / logs.EVAL_FILE).read_text().splitlines()[-1])["step"] == 4
-  resumed = loop.train(TOY, run_dir, resume=True, trainer=toy_trainer(), progress=False,
+  assert json.loads((run_dir / layout.EVAL_FILE).read_text().splitlines()[-1])["step"] == 4
+  resumed = loop.train(TOY, run_dir, resume=True, make_trainer=lambda _: toy_trainer(), progress=False,
                        log=print)
   out, err = capfd.readouterr()
   assert f"resumed from {run_dir / 'checkpoints' / '2'} at step 2" in out
@@ -334,7 +337,7 @@ def test_a_run_killed_at_a_random_instant_resumes_to_the_unbroken_runs_logs(unbr
   time.sleep(random.Random(seed).uniform(0.0, 2.0))
   proc.kill()
   proc.communicate()
-  loop.train(TOY, run_dir, resume=True, trainer=toy_trainer(), progress=False, log=quiet)
+  loop.train(TOY, run_dir, resume=True, make_trainer=lambda _: toy_trainer(), progress=False, log=quiet)
   assert run_logs(run_dir) == run_logs(straight_dir), seed
 
 
@@ -481,17 +484,17 @@ def test_a_run_has_one_writer_readers_see_a_consistent_checkpoint_and_a_dead_wri
   assert (run_dir / "config.json").read_bytes() == before["config.json"]
   for _ in range(40):  # readers: never a damaged or vanished checkpoint, and one line
     warnings = []
-    loop.read_run(run_dir, checkpoints.verify, warn=warnings.append)
+    run_folder.read_run(run_dir, checkpoints.verify, warn=warnings.append)
     assert len(warnings) == 1 and warnings[0].startswith(holder), warnings
   assert cli.main(["eval", str(run_dir)]) == 0
   (line,) = capsys.readouterr().err.splitlines()
   assert line.startswith(f"discosyn: warning: {holder}") and ": read its checkpoint " in line
-  assert not report.load_run(run_dir).finished
+  assert not report_runs.load_run(run_dir).finished
   (line,) = capsys.readouterr().err.splitlines()
   assert line.startswith(f"discosyn: warning: {holder}") and "read its logs as they are now" in line
   proc.kill()  # no chance to release the lock
   _ended(proc)
-  steps = [row["step"] for row in logs.read_jsonl(run_dir / logs.METRICS_FILE)]
+  steps = [row["step"] for row in logs.read_jsonl(run_dir / layout.METRICS_FILE)]
   assert steps == list(range(1, len(steps) + 1))  # one writer: no interleaved steps
   resumed_at = good_checkpoints_of(run_dir)[0]
   assert cli.main(["train", "--out", str(run_dir), "--resume", "--steps", str(resumed_at + 1),
@@ -500,7 +503,7 @@ def test_a_run_has_one_writer_readers_see_a_consistent_checkpoint_and_a_dead_wri
   assert err == [f"discosyn: warning: {run_dir} was left by process {proc.pid} on "
                  f"{socket.gethostname()}, started {err[0].split(', started ')[1]}"]
   assert "which has ended without finishing; this process takes it over" in err[0]
-  assert not (run_dir / runs.LOCK).exists()
+  assert not (run_dir / layout.LOCK).exists()
 
 
 @pytest.mark.parametrize("signum, status, name", [(signal.SIGINT, 130, "Ctrl-C"),
@@ -518,13 +521,13 @@ def test_ctrl_c_and_sigterm_end_a_run_in_one_line_that_says_where_it_resumes(tmp
   resume_from = pathlib.Path(line.split("; it resumes from ")[1].split(": ")[0])
   assert line.endswith(f": discosyn train --out {run_dir} --resume")
   assert resume_from.parent.parent == run_dir and checkpoints.verify(resume_from) >= 4
-  assert not (run_dir / runs.LOCK).exists()
+  assert not (run_dir / layout.LOCK).exists()
 
 
 def test_ctrl_c_before_the_first_checkpoint_of_a_new_run_leaves_nothing(tmp_path):
   run_dir = tmp_path / "deep" / "run"
   proc = _long_run(run_dir, "--checkpoint-every", "100000")
-  _wait_for(lambda: (run_dir / logs.METRICS_FILE).is_file(), proc)
+  _wait_for(lambda: (run_dir / layout.METRICS_FILE).is_file(), proc)
   proc.send_signal(signal.SIGINT)
   code, err = _ended(proc)
   assert code == 130 and len(err.strip().splitlines()) == 1, err
@@ -553,19 +556,19 @@ def test_force_keeps_the_old_run_whole_until_the_new_one_has_a_checkpoint(unbrok
   old = _snapshot(run_dir)
   # Ctrl-C before the new run's first checkpoint: the process puts the old run back
   proc = _long_run(run_dir, "--force", "--checkpoint-every", "100000")
-  _wait_for(lambda: (run_dir / logs.METRICS_FILE).is_file()
-            and (run_dir / runs.ASIDE).is_dir(), proc)
+  _wait_for(lambda: (run_dir / layout.METRICS_FILE).is_file()
+            and (run_dir / layout.ASIDE).is_dir(), proc)
   proc.send_signal(signal.SIGINT)
   code, err = _ended(proc)
   assert code == 130 and err.strip().endswith("the run it was to replace is back as it was"), err
   assert _snapshot(run_dir) == old
   # a kill there: the next writer puts it back
   proc = _long_run(run_dir, "--force", "--checkpoint-every", "100000")
-  _wait_for(lambda: (run_dir / logs.METRICS_FILE).is_file()
-            and (run_dir / runs.ASIDE).is_dir(), proc)
+  _wait_for(lambda: (run_dir / layout.METRICS_FILE).is_file()
+            and (run_dir / layout.ASIDE).is_dir(), proc)
   proc.kill()
   _ended(proc)
-  assert _snapshot(run_dir / runs.ASIDE) == old
+  assert _snapshot(run_dir / layout.ASIDE) == old
   assert cli.main(["train", "--out", str(run_dir), "--resume", "--no-progress"]) == 0
   err = capsys.readouterr().err
   assert f"the run in {run_dir} that --force was replacing is back" in err
@@ -809,6 +812,6 @@ def test_render_flags_are_checked_before_the_rollout(tmp_path, capsys, monkeypat
 def test_tensorboard_takes_non_finite_values_without_warnings(tmp_path, capfd):
   with logs.TensorBoard(tmp_path) as board:
     board.write({"step": 1, "env_steps": 20, "loss": math.nan, "a/return": math.inf}, "train")
-  scalars = tensorboard_scalars(tmp_path / logs.TENSORBOARD_DIR)
+  scalars = tensorboard_scalars(tmp_path / layout.TENSORBOARD_DIR)
   assert math.isnan(scalars["train/loss"][0][1]) and scalars["a/return"] == [(20, math.inf)]
   assert capfd.readouterr().err == ""

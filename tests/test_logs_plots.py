@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from discosyn_jax import logs, loop, plots
+from discosyn_jax import layout, logs, loop, plots
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.train import Trainer
 from tests.helpers import tensorboard_scalars
@@ -22,7 +22,7 @@ def toy_run(tmp_path_factory):
   """Four train steps on two toy tasks (episodes of 5 steps end in every rollout)."""
   run_dir = tmp_path_factory.mktemp("runs") / "toy"
   trainer = Trainer(TOY, envs=[ReachAction(0.3, episode_length=5), ReachAction(-0.3, episode_length=5)])
-  loop.train(TOY, run_dir, trainer=trainer, progress=False, log=lambda *_: None)
+  loop.train(TOY, run_dir, make_trainer=lambda _: trainer, progress=False, log=lambda *_: None)
   return run_dir
 
 
@@ -45,20 +45,20 @@ def test_an_archived_log_reads_as_the_log_itself(toy_run, tmp_path):
   log that is neither plain nor archived has none."""
   import lzma
 
-  plain = toy_run / logs.METRICS_FILE
+  plain = toy_run / layout.METRICS_FILE
   rows = logs.read_log(plain)
   assert rows and rows == logs.read_jsonl(plain)
-  kept = tmp_path / logs.METRICS_FILE
-  (tmp_path / (logs.METRICS_FILE + logs.ARCHIVED)).write_bytes(lzma.compress(plain.read_bytes()))
+  kept = tmp_path / layout.METRICS_FILE
+  (tmp_path / (layout.METRICS_FILE + logs.ARCHIVED)).write_bytes(lzma.compress(plain.read_bytes()))
   assert not kept.exists() and logs.read_log(kept) == rows
-  assert logs.read_log(tmp_path / logs.EVAL_FILE) == []
+  assert logs.read_log(tmp_path / layout.EVAL_FILE) == []
 
 
 def test_tensorboard_holds_the_jsonl_numbers_over_env_steps(toy_run):
-  metrics = logs.read_jsonl(toy_run / logs.METRICS_FILE)
-  evals = logs.read_jsonl(toy_run / logs.EVAL_FILE)
+  metrics = logs.read_jsonl(toy_run / layout.METRICS_FILE)
+  evals = logs.read_jsonl(toy_run / layout.EVAL_FILE)
   assert [r["step"] for r in metrics] == [1, 2, 3, 4] and [r["step"] for r in evals] == [2, 4]
-  scalars = tensorboard_scalars(toy_run / logs.TENSORBOARD_DIR)
+  scalars = tensorboard_scalars(toy_run / layout.TENSORBOARD_DIR)
   per_step = 2 * 4 * 5  # tasks x envs x unroll
   assert scalars["train/loss"] == [(r["env_steps"], pytest.approx(r["loss"])) for r in metrics]
   assert [s for s, _ in scalars["train/loss"]] == [per_step * k for k in (1, 2, 3, 4)]
@@ -70,7 +70,7 @@ def test_tensorboard_holds_the_jsonl_numbers_over_env_steps(toy_run):
 
 
 def test_the_run_ends_with_curve_pngs_and_run_curves_redraws_them(toy_run, tmp_path):
-  drawn = sorted(p.name for p in (toy_run / plots.PLOTS_DIR).iterdir())
+  drawn = sorted(p.name for p in (toy_run / layout.PLOTS_DIR).iterdir())
   assert drawn == ["losses.png", "return.png", "success.png"]
   paths = plots.run_curves(toy_run, tmp_path / "out")
   assert [p.name for p in paths] == ["success.png", "return.png", "losses.png"]

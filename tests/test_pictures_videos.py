@@ -7,7 +7,8 @@ from PIL import Image
 
 import tasks
 
-from discosyn_jax import checkpoints, cli, hand, loop, synergy_pictures, videos
+from discosyn import cli
+from discosyn_jax import checkpoints, hand, layout, synergy_pictures, videos
 from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.train import Trainer
@@ -25,8 +26,8 @@ def saved_run(run_dir, config, envs=None):
   """A run directory holding the initial state as its final checkpoint: the pictures and
   videos read a run the same way whether it trained for a minute or not at all."""
   run_dir.mkdir(parents=True, exist_ok=True)
-  config_lib.save(config, run_dir / loop.CONFIG_FILE)
-  trainer = Trainer(config, envs)
+  config_lib.save(config, run_dir / layout.CONFIG_FILE)
+  trainer = Trainer(config, envs) if envs is not None else tasks.trainer(config)
   state = trainer.init()
   checkpoints.save(run_dir, state, config.keep_checkpoints, final=True)
   return trainer, state
@@ -91,7 +92,7 @@ def test_synergies_command_draws_postures_and_the_linear_matrix(linear_run, tmp_
 
 def test_mlp_decoder_gets_postures_only(tmp_path):
   config = TINY.replace(decoder="mlp")
-  trainer = Trainer(config)
+  trainer = tasks.trainer(config)
   paths = synergy_pictures.write(trainer, trainer.init().params, tmp_path, height=48, width=64)
   assert [p.name for p in paths] == ["postures.png"]
   assert sorted(p.name for p in tmp_path.iterdir()) == ["postures.png"]
@@ -150,3 +151,15 @@ def test_render_command_frame_and_bad_input(linear_run, tmp_path, capsys):
   assert cli.main(["render", str(tmp_path), "--task", "valve1"]) == 2
   assert "not a run directory" in capsys.readouterr().err
   assert [p.name for p in (run_dir / "videos").iterdir()] == [png.name]
+
+
+def test_a_run_without_scenes_is_refused_in_one_line(tmp_path, capsys):
+  config = TINY.replace(tasks=("planted0",), n_synergies=3)
+  run = tmp_path / "run"
+  saved_run(run, config)
+  assert cli.main(["synergies", str(run)]) == 2
+  assert cli.main(["render", str(run), "--task", "planted0"]) == 2
+  err = capsys.readouterr().err.splitlines()
+  assert err[-2:] == [f"discosyn: error: {run}: planted0 has no scene to {what} (a pure-JAX task, "
+                      "as the planted test bed's)" for what in ("picture", "film")]
+  assert sorted(p.name for p in run.iterdir()) == ["config.json", "final"]  # nothing written

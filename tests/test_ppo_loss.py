@@ -10,7 +10,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from discosyn_jax import networks, ppo
+from discosyn_jax import networks, policy, ppo
 from discosyn_jax.config import TrainConfig
 from tests import reference
 
@@ -84,7 +84,7 @@ def test_gaussian_log_prob_and_entropy_are_scipys():
 @pytest.mark.parametrize("decoder", ["identity", "linear", "mlp"])
 def test_joint_log_prob_is_head_plus_decoder(decoder):
   model, params, samples = setup(decoder)
-  got = jax.jit(lambda params: [ppo.joint_log_prob(model, params, task, s.obs, s.z, s.action)[0]
+  got = jax.jit(lambda params: [policy.log_prob(model, params, task, s.obs, s.z, s.action)[0]
                                 for task, s in enumerate(samples)])(params)
   p = reference.as_numpy(params["params"])
   for task, s in enumerate(numpy_samples(samples)):

@@ -10,7 +10,8 @@ import pytest
 from flax import struct
 
 import tasks
-from discosyn_jax import checkpoints, cli, loop, runs, wrappers
+from discosyn import cli
+from discosyn_jax import checkpoints, loop, run_folder, runs, wrappers
 from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.train import Trainer
@@ -26,7 +27,7 @@ VALVE = TrainConfig(tasks=("valve1",), steps=4, checkpoint_every=2, **TINY)
 def valve_run(tmp_path_factory):
   """A 4-step run on valve1, checkpointed at steps 2 and 4."""
   run_dir = tmp_path_factory.mktemp("runs") / "straight"
-  result = loop.train(VALVE, run_dir, progress=False, log=lambda *_: None)
+  result = loop.train(VALVE, run_dir, make_trainer=tasks.trainer, progress=False, log=lambda *_: None)
   return run_dir, result
 
 
@@ -80,14 +81,14 @@ def test_resume_gives_the_same_state_as_an_unbroken_run(valve_run, tmp_path):
   straight_dir, straight = valve_run
   assert (straight_dir / "final").is_dir() and (straight_dir / "checkpoints" / "2").is_dir()
   broken = tmp_path / "broken"
-  loop.train(VALVE.replace(steps=2), broken, progress=False, log=lambda *_: None)
+  loop.train(VALVE.replace(steps=2), broken, make_trainer=tasks.trainer, progress=False, log=lambda *_: None)
   # the unbroken run's periodic checkpoint at step 2 holds this run's final state
-  trainer = Trainer(VALVE)
+  trainer = tasks.trainer(VALVE)
   jax.tree.map(np.testing.assert_array_equal,
                jax.device_get(loop.restore(trainer, straight_dir / "checkpoints" / "2")),
                jax.device_get(loop.restore(trainer, broken / "final")))
   shutil.rmtree(broken / "final")  # resume from the periodic checkpoint
-  resumed = loop.train(VALVE, broken, resume=True, progress=False, log=lambda *_: None)
+  resumed = loop.train(VALVE, broken, resume=True, make_trainer=tasks.trainer, progress=False, log=lambda *_: None)
   a, b = jax.device_get(straight["state"]), jax.device_get(resumed["state"])
   assert int(b.step) == 4
   # bit for bit: parameters, optimiser moments, normalisers, env physics, rng
@@ -103,7 +104,7 @@ def test_resume_gives_the_same_state_as_an_unbroken_run(valve_run, tmp_path):
 
 def test_checkpoint_restores_the_whole_state(valve_run):
   run_dir, straight = valve_run
-  trainer = Trainer(VALVE)
+  trainer = tasks.trainer(VALVE)
   restored = loop.restore(trainer, run_dir / "final")
   jax.tree.map(np.testing.assert_array_equal, jax.device_get(straight["state"]),
                jax.device_get(restored))
@@ -122,10 +123,10 @@ def test_non_finite_training_stops_and_keeps_the_last_good_checkpoint(tmp_path):
   config = TrainConfig(tasks=("a",), steps=2, checkpoint_every=2, **{**TINY, "backend": "auto"})
   run_dir = tmp_path / "run"
   good = Trainer(config, envs=[ReachAction(0.3)])
-  loop.train(config, run_dir, trainer=good, progress=False, log=lambda *_: None)
+  loop.train(config, run_dir, make_trainer=lambda _: good, progress=False, log=lambda *_: None)
   bad = Trainer(config.replace(steps=4), envs=[ReachAction(np.full(20, np.nan))])
   with pytest.raises(loop.TrainingDiverged, match="non-finite .* step 3.*final"):
-    loop.train(config.replace(steps=4), run_dir, resume=True, trainer=bad, progress=False,
+    loop.train(config.replace(steps=4), run_dir, resume=True, make_trainer=lambda _: bad, progress=False,
                log=lambda *_: None)
   assert int(loop.restore(good, run_dir / "final").step) == 2
   assert sorted(p.name for p in (run_dir / "checkpoints").iterdir()) == ["2"]
@@ -153,12 +154,12 @@ def test_force_replaces_the_run_and_only_it(tmp_path):
   beside.write_text("kept")
   old, new = TrainConfig(**TINY, steps=4), TrainConfig(**TINY, steps=9)
   run_dir.mkdir()
-  config_lib.save(loop.run_config(run_dir, old, resume=False, force=False), run_dir / "config.json")
+  config_lib.save(run_folder.run_config(run_dir, old, resume=False, force=False), run_dir / "config.json")
   (run_dir / "metrics.jsonl").write_text("{}\n")
   (run_dir / "checkpoints" / "2").mkdir(parents=True)
   with pytest.raises(ValueError, match="already holds a run"):
-    loop.run_config(run_dir, new, resume=False, force=False)
-  assert loop.run_config(run_dir, new, resume=False, force=True) == new
+    run_folder.run_config(run_dir, new, resume=False, force=False)
+  assert run_folder.run_config(run_dir, new, resume=False, force=True) == new
   with runs.Writer(run_dir) as writer:  # the old run is set aside until the new one has a checkpoint
     writer.begin(lambda: config_lib.save(new, run_dir / "config.json"), replace=True)
     assert sorted(p.name for p in run_dir.iterdir()) == ["config.json", "replaced", "writer.lock"]
@@ -168,7 +169,7 @@ def test_force_replaces_the_run_and_only_it(tmp_path):
   assert beside.read_text() == "kept"
   # a folder that holds something else than a run is never deleted, --force or not
   with pytest.raises(ValueError, match="holds no run"):
-    loop.run_config(tmp_path, new, resume=False, force=True)
+    run_folder.run_config(tmp_path, new, resume=False, force=True)
   assert beside.read_text() == "kept"
 
 
@@ -193,15 +194,15 @@ def test_stop_at_ends_the_run_at_the_first_evaluation_that_reaches_it(tmp_path):
   config = VALVE.replace(steps=6, eval_every=2, checkpoint_every=0)
   logged = []
   # success >= 0 holds at any evaluation: the run ends at the first, step 2, as a whole run
-  done = loop.train(config, tmp_path / "run", progress=False, log=logged.append, stop_at=0.0)
+  done = loop.train(config, tmp_path / "run", make_trainer=tasks.trainer, progress=False, log=logged.append, stop_at=0.0)
   assert int(done["state"].step) == 2 and any("the run ends here" in line for line in logged)
   evals = [json.loads(l) for l in (tmp_path / "run" / "eval.jsonl").read_text().splitlines()]
   assert [row["step"] for row in evals] == [2]  # that evaluation is the final one, not redone
   assert len((tmp_path / "run" / "metrics.jsonl").read_text().splitlines()) == 2
-  _, state = loop.load_trained(tmp_path / "run")
+  _, state = loop.load_trained(tmp_path / "run", tasks.trainer)
   assert int(state.step) == 2
   # a rate above any success never stops it
-  done = loop.train(config, tmp_path / "all", progress=False, log=logged.append, stop_at=1.01)
+  done = loop.train(config, tmp_path / "all", make_trainer=tasks.trainer, progress=False, log=logged.append, stop_at=1.01)
   assert int(done["state"].step) == 6
 
 

@@ -16,16 +16,11 @@ from __future__ import annotations
 
 import jax
 import mujoco
-from flax import struct
 
+from discosyn_jax.physics.view import PhysicsView
+
+__all__ = ["BACKENDS", "PhysicsView", "make_backend", "resolve"]
 BACKENDS = ("native", "mjx")
-
-
-@struct.dataclass
-class PhysicsView:
-  qpos: jax.Array
-  qvel: jax.Array
-  sensordata: jax.Array
 
 
 def resolve(backend: str) -> str:

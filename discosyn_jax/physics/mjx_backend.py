@@ -10,7 +10,7 @@ import jax.numpy as jnp
 import mujoco
 from mujoco import mjx
 
-from discosyn_jax.physics import PhysicsView
+from discosyn_jax.physics.view import PhysicsView
 
 
 IMPLS = ("jax", "warp")

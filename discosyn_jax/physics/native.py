@@ -25,7 +25,7 @@ import numpy as np
 from flax import struct
 
 from discosyn_jax import checks
-from discosyn_jax.physics import PhysicsView
+from discosyn_jax.physics.view import PhysicsView
 
 _INTEGRATION = mujoco.mjtState.mjSTATE_INTEGRATION
 _CTRL = mujoco.mjtState.mjSTATE_CTRL

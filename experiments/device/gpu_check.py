@@ -41,7 +41,6 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
 import tasks  # noqa: E402
-from discosyn_jax.train import Trainer  # noqa: E402
 from experiments import paper, physics_study, presets  # noqa: E402
 
 
@@ -160,7 +159,7 @@ def main(argv=None):
 
   sizes = paper.SCALES[args.scale].train
   config = presets.preset(args.preset).replace(backend=args.backend, **sizes).validate()
-  trainer, build_s = timed(lambda: Trainer(config))
+  trainer, build_s = timed(lambda: tasks.trainer(config))
   state, init_s = timed(trainer.init)
   train_step, compile_s = timed(lambda: trainer.train_step.lower(state).compile())
   log("init", preset=args.preset, scale=args.scale, backend=trainer.envs[0].backend,

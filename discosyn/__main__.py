@@ -1,0 +1,5 @@
+"""`python -m discosyn ...`: the `discosyn` command."""
+
+from discosyn.cli import entry
+
+entry()

@@ -1,0 +1,245 @@
+"""The `discosyn` commands, one function each (`discosyn/cli.py` parses their flags). Each
+imports what it needs when it runs, so that `--help` answers without JAX."""
+
+from __future__ import annotations
+
+import pathlib
+import shlex
+import time
+
+from discosyn_jax import layout
+
+
+class UsageError(Exception):
+  """Bad input: reported as one line, exit status 2."""
+
+
+def cmd_tasks(args) -> None:
+  import tasks
+
+  print(f"{'task':16s} {'obs':>4s} {'act':>4s}  {'sets':10s} description")
+  for name, entry in tasks.REGISTRY.items():
+    env = tasks.make(name, backend="native")
+    sets = ",".join(tasks.sets_of(name)) or "-"
+    print(f"{name:16s} {env.observation_size:4d} {env.action_size:4d}  {sets:10s} {entry.summary}")
+
+
+def cmd_demo(args) -> None:
+  """Build each scene, run a random policy for one episode per env, print what it measured."""
+  import jax
+
+  import tasks
+  from discosyn_jax import rollouts
+
+  print(f"random policy, {args.batch} envs x one episode per task")
+  print(f"{'task':8s} {'backend':7s} {'obs':>4s} {'build s':>8s} {'compile s':>9s} {'env steps/s':>11s} "
+        f"{'return':>7s} {'success':>7s} {'diverged':>8s}")
+  for name in tasks.expand(args.tasks):
+    start = time.perf_counter()
+    env = tasks.make(name, backend=args.backend)
+    built = time.perf_counter() - start
+    uniform = lambda t, key, batch, env=env: jax.random.uniform(
+        key, (batch, env.action_size), minval=-1, maxval=1)
+    keys = jax.random.split(jax.random.PRNGKey(args.seed), args.batch)
+    start = time.perf_counter()
+    run = rollouts.episode_fn(env, uniform, seed=args.seed + 1).lower(keys).compile()
+    compiled = time.perf_counter() - start
+    start = time.perf_counter()
+    _, states = jax.block_until_ready(run(keys))
+    rate = args.batch * env.episode_length / (time.perf_counter() - start)
+    ret, success = states.reward.sum(0).mean(), states.metrics["success"][-1].mean()
+    print(f"{name:8s} {env.backend:7s} {env.observation_size:4d} {built:8.2f} {compiled:9.2f} {rate:11,.0f} "
+          f"{float(ret):7.2f} {float(success):7.1%} {int(states.metrics['diverged'].sum()):8d}")
+
+
+def cmd_render_scenes(args) -> None:
+  import jax
+  import jax.numpy as jnp
+  from PIL import Image
+
+  import tasks
+  from discosyn_jax import render, scripted
+
+  out = pathlib.Path(args.out)
+  names = tasks.expand(args.tasks)  # a bad name fails before the folder is made
+  out.mkdir(parents=True, exist_ok=True)
+  for name in names:
+    env = tasks.make(name, backend="native")
+    # a frame from the task's scripted motion (valves: the middle of a stroke, fingers dipped)
+    actions = jnp.asarray(scripted.for_task(name, args.step, env.dt))
+    state = env.reset(jax.random.PRNGKey(args.seed))
+    for action in actions:
+      state = env.step(state, action)
+    data = env.physics.to_mjdata(jax.device_get(state.pipeline_state))
+    env.task.show(env.mj_model, data, jax.device_get(state.info))
+    path = out / f"{name}.png"
+    Image.fromarray(render.frames(env.mj_model, data)).save(path)
+    print(path)
+
+
+# train flags -> TrainConfig fields; a flag left out keeps the preset's value
+_TRAIN_FLAGS = {
+    "synergies": "n_synergies", "decoder": "decoder", "alpha1": "alpha1", "alpha2": "alpha2",
+    "alpha3": "alpha3", "num_envs": "num_envs", "unroll_length": "unroll_length",
+    "minibatches": "num_minibatches", "epochs": "update_epochs", "lr": "learning_rate",
+    "steps": "steps", "seed": "seed", "backend": "backend", "physics": "physics",
+    "eval_every": "eval_every",
+    "eval_envs": "eval_envs", "checkpoint_every": "checkpoint_every",
+    "decoder_weight_decay": "decoder_weight_decay",
+    "decoder_weight_decay_steps": "decoder_weight_decay_steps",
+}
+
+
+def train_config(args, base=None):
+  """The preset (or, when resuming, the run's own config) with the flags given applied."""
+  import tasks
+  from experiments import presets
+
+  if base is None or args.preset is not None:
+    base = presets.preset("quickstart" if args.preset is None else args.preset)
+  changes = {field: getattr(args, flag) for flag, field in _TRAIN_FLAGS.items()
+             if getattr(args, flag) is not None}
+  if args.tasks:
+    changes["tasks"] = tuple(tasks.expand(args.tasks))
+  if args.decoder_from:
+    from discosyn_jax import synergies
+
+    meta, _ = synergies.read(args.decoder_from)
+    frozen = synergies.frozen_fields(meta, args.decoder_from)
+    changes = {**frozen, **changes}  # flags given explicitly win (e.g. --alpha2)
+    if changes["decoder"] != frozen["decoder"] or changes["n_synergies"] != frozen["n_synergies"]:
+      raise UsageError(f"--decoder-from {args.decoder_from} holds a {frozen['decoder']} decoder "
+                       f"with {frozen['n_synergies']} synergies; drop --decoder / --synergies")
+  return base.replace(**changes).validate()
+
+
+def cmd_train(args) -> None:
+  import tasks
+  from discosyn_jax import config as config_lib
+  from discosyn_jax import devices, loop, runs
+
+  if args.out == "":
+    raise UsageError("--out is empty: name a run directory (or leave --out out)")
+  out = pathlib.Path(args.out or f"runs/{args.preset or 'quickstart'}-seed{args.seed or 0}")
+  saved = out / layout.CONFIG_FILE
+  if args.resume and saved.is_file():  # the run's own config: what a dead writer left settled
+    runs.take_over(out)
+  base = config_lib.load(saved) if args.resume and saved.is_file() else None
+  config = train_config(args, base)
+  devices.mesh_for(config, args.devices)  # a bad device count fails before the run directory
+  if args.stop_at is not None and not 0 <= args.stop_at <= 1:
+    raise ValueError(f"--stop-at is a success rate in [0, 1], not {args.stop_at}")
+  print(f"run directory: {out}")
+  done = loop.train(config, out, make_trainer=lambda c: tasks.trainer(c, devices=args.devices),
+                    resume=args.resume, force=args.force, progress=not args.no_progress,
+                    stop_at=args.stop_at)
+  print(next_commands(out, done["state"].step, config, done["results"]))
+
+
+def next_commands(out: pathlib.Path, step, config, results) -> str:
+  """What to do with a finished run, its folder filled in."""
+  run = shlex.quote(str(out))
+  best = max(config.tasks, key=lambda t: results[t]["success"])
+  lines = ["next:"]
+  if config.decoder != "identity":
+    lines.append(f"  discosyn synergies {run}                 # the hand along each synergy")
+  lines += [f"  discosyn render {run} --task {best}    # a video of the policy on {best}",
+            f"  discosyn eval {run}                      # evaluate the run again",
+            f"  discosyn train --out {run} --resume --steps {2 * int(step)}   # train for longer"]
+  return "\n".join(lines)
+
+
+def cmd_eval(args) -> None:
+  import tasks
+  import jax
+
+  from discosyn_jax import evaluation, loop
+
+  changes = {"backend": args.backend} if args.backend else {}
+  if args.episodes is not None:
+    changes["eval_envs"] = args.episodes
+  trainer, state = loop.load_trained(args.run, tasks.trainer, **changes)
+  results = evaluation.evaluate(trainer, state)
+  print(evaluation.format_table(results, int(jax.device_get(state.step)), trainer.config))
+
+
+def _derived_name(path, run_dir: pathlib.Path, name: str, step: int) -> str:
+  """`name` for the pictures of a run's latest state, `name-step<N>` for one checkpoint's."""
+  return name if pathlib.Path(path).resolve() == run_dir.resolve() else f"{name}-step{step}"
+
+
+def _check_scenes(trainer, run, what: str) -> None:
+  """Pictures and videos need a MuJoCo scene; the planted test bed's tasks have none."""
+  bare = [name for name, env in zip(trainer.config.tasks, trainer.envs)
+          if getattr(env, "mj_model", None) is None]
+  if bare:
+    raise UsageError(f"{run}: {', '.join(bare)} {'has' if len(bare) == 1 else 'have'} no scene to "
+                     f"{what} (a pure-JAX task, as the planted test bed's)")
+
+
+def cmd_synergies(args) -> None:
+  import tasks
+  from discosyn_jax import loop, run_folder, synergy_pictures
+
+  run_dir = run_folder.find_run_dir(args.run)
+  trainer, state = loop.load_trained(args.run, tasks.trainer, backend="native")  # host physics: pictures only
+  _check_scenes(trainer, args.run, "picture")
+  step = int(state.step)
+  default = run_dir / _derived_name(args.run, run_dir, "synergies", step)
+  out = pathlib.Path(args.out) if args.out else default
+  paths = synergy_pictures.write(trainer, state.params, out, k=args.k, force=args.force,
+                                 title=f"{run_dir.resolve().name} step {step}:")
+  for path in paths:
+    print(path)
+
+
+def cmd_render(args) -> None:
+  import tasks
+  from discosyn_jax import loop, run_folder, videos
+
+  run_dir = run_folder.find_run_dir(args.run)
+  trainer, state = loop.load_trained(args.run, tasks.trainer, backend="native")
+  _check_scenes(trainer, args.run, "film")
+  videos.task_index(trainer.config, args.task)  # a bad task fails before any rollout
+  name = _derived_name(args.run, run_dir, args.task, int(state.step))
+  suffix = ".mp4" if args.frame is None else f"-frame{args.frame}.png"
+  out = pathlib.Path(args.out) if args.out else run_dir / "videos" / f"{name}{suffix}"
+  written = videos.render_policy(trainer, state, args.task, out, episodes=args.episodes,
+                                 seed=args.seed, frame=args.frame, force=args.force,
+                                 height=args.height, width=args.width,
+                                 cameras=tuple(args.camera or ("front", "oblique")))
+  for steps, ret, success in zip(written["steps"], written["return"], written["success"]):
+    print(f"episode: {steps} steps, return {ret:.2f}, success {success:.0f}")
+  print(f"{written['path']} ({written['frames']} frames)")
+
+
+def cmd_experiment(args) -> None:
+  from experiments import paper
+
+  out = pathlib.Path(args.out)
+  seeds = tuple(args.seeds) if args.seeds else getattr(paper.SCALES.get(args.scale), "seeds", (0,))
+  only = f", methods {' '.join(args.methods)}" if args.methods else ""
+  print(f"experiment {args.name} at scale {args.scale}, seeds {' '.join(map(str, seeds))}{only}, "
+        f"in {out}")
+  start = time.perf_counter()
+  paper.run(args.name, out, args.scale, seeds, decoder_from=args.decoder_from,
+            methods=args.methods, progress=args.progress)
+  print(f"experiment {args.name} finished in {(time.perf_counter() - start) / 60:.1f} min")
+
+
+def cmd_upgrade(args) -> None:
+  from discosyn_jax import config as config_lib
+  from discosyn_jax import run_folder, runs
+
+  for run in map(pathlib.Path, args.runs):
+    runs.refuse_if_written(run)
+    added = config_lib.upgrade(run_folder.find_run_dir(run) / layout.CONFIG_FILE)
+    print(f"{run}: {'added ' + ', '.join(added) if added else 'up to date'}")
+
+
+def cmd_report(args) -> None:
+  from experiments import report
+
+  path = report.write(args.runs, pathlib.Path(args.out), threshold=args.threshold,
+                      with_tsne=not args.no_tsne, force=args.force)
+  print(path)

@@ -1,0 +1,137 @@
+"""The figures of `discosyn report` (report.py): evaluation curves per method with their
+spread over seeds, the decoder's overlap curves, and the t-SNE of the z a DiscoSyn policy
+picks (the paper's Fig. 6)."""
+
+from __future__ import annotations
+
+import pathlib
+
+import numpy as np
+
+from discosyn_jax import layout, logs
+from experiments.report_runs import Run, order
+
+
+def curves(runs: list[Run], path: pathlib.Path, title: str, metric: str = "success") -> pathlib.Path:
+  """Evaluation `metric` against env steps of each task: a panel per task, a line per
+  method (mean over seeds; the band spans the seeds)."""
+  import matplotlib
+
+  matplotlib.use("Agg")
+  import matplotlib.pyplot as plt
+
+  task_names = list(dict.fromkeys(t for r in runs for t in r.config.tasks))
+  fig, axes = plt.subplots(1, len(task_names), figsize=(max(6, 4 * len(task_names)), 3.4),
+                           squeeze=False)
+  for ax, task in zip(axes[0], task_names):
+    for method in order({r.method for r in runs if task in r.config.tasks}):
+      group = [r for r in runs if r.method == method and task in r.config.tasks and r.evals]
+      if group:
+        _band(ax, method, [[(r.per_task_env_steps(row), row.get(f"{task}/{metric}", np.nan))
+                            for row in r.evals] for r in group])
+    ax.set_title(task)
+    ax.set_xlabel("env steps of the task")
+    ax.set_ylabel(f"evaluation {metric}")
+    ax.grid(alpha=0.3)
+  return _save(fig, axes, title, path)
+
+
+def _save(fig, axes, title: str, path: pathlib.Path) -> pathlib.Path:
+  """A figure of panels with the legend in the last one, written to `path` and closed."""
+  import matplotlib.pyplot as plt
+
+  axes[0][-1].legend(fontsize=7, loc="best")
+  fig.suptitle(title)
+  fig.tight_layout()
+  fig.savefig(path, dpi=90)
+  plt.close(fig)
+  return path
+
+
+def _band(ax, label: str, series: list[list[tuple[float, float]]]) -> None:
+  """A line of the mean over runs of (x, y) series, and a band spanning the runs."""
+  steps = sorted({x for one in series for x, _ in one})
+  table = np.full((len(series), len(steps)), np.nan)
+  for i, one in enumerate(series):
+    for x, y in one:
+      table[i, steps.index(x)] = y
+  line, = ax.plot(steps, np.nanmean(table, axis=0), label=f"{label} [{len(series)}]")
+  if len(series) > 1:
+    ax.fill_between(steps, np.nanmin(table, axis=0), np.nanmax(table, axis=0),
+                    color=line.get_color(), alpha=0.2)
+
+
+def overlap_curves(runs: list[Run], path: pathlib.Path, title: str) -> pathlib.Path | None:
+  """The decoder's overlap with the planted span and with its own start against env steps
+  of each task, as logged every train step: a line per method (mean over seeds, band)."""
+  import matplotlib
+
+  matplotlib.use("Agg")
+  import matplotlib.pyplot as plt
+
+  from discosyn_jax import diagnostics
+
+  rows = {r.path: [row for row in logs.read_log(r.path / layout.METRICS_FILE) if "decoder/change" in row]
+          for r in runs}
+  titles = {"decoder/overlap_planted": "with the planted span",
+            "decoder/overlap_start": "with its own start"}
+  keys = [k for k in titles if any(k in row for r in runs for row in rows[r.path])]
+  if not keys:
+    return None
+  fig, axes = plt.subplots(1, len(keys), figsize=(5 * len(keys), 3.4), squeeze=False)
+  for ax, key in zip(axes[0], keys):
+    for method in order({r.method for r in runs}):
+      group = [r for r in runs if r.method == method and any(key in row for row in rows[r.path])]
+      if group:
+        _band(ax, method, [[(r.per_task_env_steps(row), row[key]) for row in rows[r.path]
+                            if key in row] for r in group])
+    b = runs[0].config.n_synergies
+    ax.axhline(diagnostics.chance_overlap(b, b), color="gray", ls=":", label="chance")
+    ax.set_title(f"overlap {titles[key]}")
+    ax.set_xlabel("env steps of the task")
+    ax.set_ylabel("overlap")
+    ax.set_ylim(0, 1.02)
+    ax.grid(alpha=0.3)
+  return _save(fig, axes, title, path)
+
+
+def tsne(run: Run, path: pathlib.Path, episodes: int = 8, points: int = 2000,
+         make_trainer=None) -> pathlib.Path:
+  """t-SNE of the z the deterministic policy picks on each task (the paper's Fig. 6)."""
+  import jax
+  import matplotlib
+
+  matplotlib.use("Agg")
+  import matplotlib.pyplot as plt
+  from sklearn.manifold import TSNE
+
+  from discosyn_jax import evaluation, loop
+
+  import tasks
+
+  trainer, state = loop.load_trained(run.path, make_trainer or tasks.trainer)
+  rollouts = evaluation.rollouts(trainer, state.params, state.normalizers, jax.random.PRNGKey(0), episodes)
+  rng = np.random.default_rng(0)
+  zs, labels = [], []
+  for n, (task, traj) in enumerate(rollouts.items()):
+    z = np.asarray(traj["z"])[np.asarray(traj["alive"]) > 0]
+    keep = rng.permutation(len(z))[:points // len(rollouts)]
+    zs.append(z[keep])
+    labels += [n] * len(keep)
+  z = np.concatenate(zs)
+  embedded = TSNE(n_components=2, perplexity=min(30.0, len(z) / 4), random_state=0).fit_transform(z)
+  fig, ax = plt.subplots(figsize=(5, 4.5))
+  labels = np.array(labels)
+  for n, task in enumerate(rollouts):
+    ax.scatter(*embedded[labels == n].T, s=4, label=task)
+  ax.legend(markerscale=3, fontsize=8)
+  ax.set_title(f"t-SNE of z: {run.method} on {run.task_set} (seed {run.seed})")
+  ax.set_xticks([])
+  ax.set_yticks([])
+  fig.tight_layout()
+  fig.savefig(path, dpi=90)
+  plt.close(fig)
+  return path
+
+
+# -- the report ------------------------------------------------------------------

@@ -1,0 +1,128 @@
+"""The runs and fits `discosyn report` reads (report.py): each run folder with its method,
+task set and seed (from its experiment.json, else from its config) and its evaluations."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import pathlib
+from typing import Any
+
+from discosyn_jax import config as config_lib
+from discosyn_jax import layout, logs
+from discosyn_jax.config import TrainConfig
+from experiments.presets import DECAY
+from tasks import TASK_SETS
+
+_DECAYED = f"-wd{DECAY['decoder_weight_decay']:g}a{DECAY['decoder_weight_decay_steps']}"
+METHOD_ORDER = ("PPO", "PCA4", "AE4", "PCA6", "AE6")
+for _b in (3, 4, 6):  # each DiscoSyn row (the paper's update, the decayed) above its controls
+  METHOD_ORDER += tuple(f"{m}{_b}-{k}{c}" for k in ("L", "NL") for m, c in (
+      ("DiscoSyn", ""), ("DiscoSyn", _DECAYED), ("Random", ""), ("Random", "-zfree"),
+      ("Random", "-matched"), ("Random", f"-matched{_DECAYED}")))
+MAIN_EXPERIMENTS = ("discosyn", "baselines")
+FIT_FILE = "explained_variance.json"  # in a folder of synergy files: what the fits explain
+
+
+@dataclasses.dataclass
+class Run:
+  path: pathlib.Path
+  config: TrainConfig
+  experiment: str
+  method: str
+  task_set: str
+  seed: int
+  evals: list[dict[str, Any]]
+  finished: bool
+  scale: str | None  # None for a run `discosyn experiment` did not make
+
+  @property
+  def main(self) -> bool:
+    """A run of the solved tables (DiscoSyn or a baseline), not transfer or sparse."""
+    return self.experiment.split("-")[0] in MAIN_EXPERIMENTS or self.experiment == "train"
+
+  @property
+  def final(self) -> dict[str, Any]:
+    return self.evals[-1] if self.evals else {}
+
+  def per_task_env_steps(self, row) -> int:
+    return row["step"] * self.config.num_envs * self.config.unroll_length
+
+
+def _method_of(config: TrainConfig) -> str:
+  from discosyn_jax import synergies
+
+  if config.decoder == "identity":
+    return "PPO"
+  if not config.decoder_from:
+    return synergies.method_name(config)
+  try:  # a synergy file knows its method (PCA, AE); a run folder is DiscoSyn's
+    return synergies.method_name(synergies.read(config.decoder_from)[0]) + " frozen"
+  except ValueError:
+    return synergies.method_name(config) + " frozen"
+
+
+def _set_of(config: TrainConfig) -> str:
+  for name, members in TASK_SETS.items():
+    if tuple(members) == tuple(config.tasks):
+      return name
+  return "+".join(config.tasks)
+
+
+def load_run(path: pathlib.Path) -> Run:
+  from discosyn_jax import checkpoints, runs
+
+  config = config_lib.load(path / layout.CONFIG_FILE)
+  writer = runs.writer_of(path)
+  if writer:  # its logs are read as far as they go now
+    checkpoints.warn(f"{path} is being written by {writer}: read its logs as they are now")
+  meta_file = path / layout.EXPERIMENT_FILE
+  meta = json.loads(meta_file.read_text()) if meta_file.is_file() else {}
+  evals = logs.read_log(path / layout.EVAL_FILE)
+  # logs kept without checkpoints (docs/results) are finished when the last step was evaluated
+  finished = (path / layout.FINAL).is_dir() or bool(evals and evals[-1]["step"] >= config.steps)
+  # derived from the config only where experiment.json is silent (_method_of may read a file)
+  return Run(path=path, config=config, experiment=meta.get("experiment", "train"),
+             method=meta["method"] if "method" in meta else _method_of(config),
+             task_set=meta["set"] if "set" in meta else _set_of(config),
+             seed=meta.get("seed", config.seed), evals=evals, finished=finished,
+             scale=meta.get("scale"))
+
+
+def find(paths, inside: bool = False) -> tuple[list[Run], list[dict[str, Any]]]:
+  """The runs and the synergy fits in `paths` (run folders, fit folders, or folders of them).
+  A folder named here must hold one; one found inside (a report, say) may hold none."""
+  runs, fits = [], []
+  for path in map(pathlib.Path, paths):
+    if not path.is_dir():
+      raise ValueError(f"{path} is not a folder")
+    if (path / layout.CONFIG_FILE).is_file():
+      runs.append(load_run(path))
+    elif (path / FIT_FILE).is_file():
+      fits.append(json.loads((path / FIT_FILE).read_text()))
+    else:
+      inner = sorted(p for p in path.iterdir() if p.is_dir())
+      found = find(inner, inside=True) if inner else ([], [])
+      if not found[0] and not found[1] and not inside:
+        raise ValueError(f"{path} holds no run (config.json) and no synergy fit")
+      runs += found[0]
+      fits += found[1]
+  if not inside:
+    _one_run_per_seed(runs)
+  return runs, fits
+
+
+def _one_run_per_seed(runs: list[Run]) -> None:
+  """Two runs of one method and seed would count as two seeds: name the pair instead."""
+  seen = {}
+  for run in runs:
+    key = (run.experiment, run.task_set, tuple(run.config.tasks), run.method, run.seed)
+    if key in seen:
+      raise ValueError(f"{seen[key].path} and {run.path} are both {run.method} seed {run.seed} "
+                       f"on {run.task_set}; give the report one of them")
+    seen[key] = run
+
+
+def order(methods) -> list[str]:
+  known = [m for m in METHOD_ORDER if m in methods]
+  return known + sorted(set(methods) - set(known))

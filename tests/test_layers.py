@@ -1,0 +1,83 @@
+"""The house in layers (docs/ARCHITECTURE.md): the library (discosyn_jax) never imports the
+tasks, the experiments or the command line; the tasks never import the experiments or the
+command line; the experiments never import the command line; and no module imports itself
+back through others. Every import counts, those inside functions too."""
+
+import ast
+import pathlib
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+PACKAGES = ("discosyn", "discosyn_jax", "tasks", "experiments")
+BELOW = {"discosyn_jax": (), "tasks": ("discosyn_jax",),
+         "experiments": ("discosyn_jax", "tasks"), "discosyn": PACKAGES}
+
+
+def modules() -> dict[str, pathlib.Path]:
+  out = {}
+  for package in PACKAGES:
+    for path in sorted((ROOT / package).rglob("*.py")):
+      parts = path.relative_to(ROOT).with_suffix("").parts
+      out[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
+  return out
+
+
+def imports(name: str, path: pathlib.Path, known) -> set[str]:
+  """The project's modules that `name` imports (a name imported from a package counts as
+  its module where it is one, else as the package)."""
+  package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+  found = set()
+  for node in ast.walk(ast.parse(path.read_text(), str(path))):
+    if isinstance(node, ast.Import):
+      targets = [alias.name for alias in node.names]
+    elif isinstance(node, ast.ImportFrom):
+      base = node.module or ""
+      if node.level:  # relative
+        base = ".".join(package.split(".")[:len(package.split(".")) - node.level + 1]
+                        + ([node.module] if node.module else []))
+      targets = [f"{base}.{alias.name}" if f"{base}.{alias.name}" in known else base
+                 for alias in node.names]
+    else:
+      continue
+    for target in targets:
+      while target and target not in known:  # `import a.b.c`: the deepest module known
+        target = target.rpartition(".")[0]
+      if target and target != name:
+        found.add(target)
+  return found
+
+
+def graph() -> dict[str, set[str]]:
+  known = modules()
+  return {name: imports(name, path, known) for name, path in known.items()}
+
+
+def test_no_layer_imports_one_above_it():
+  wrong = [f"{name} imports {target}" for name, targets in graph().items()
+           for target in targets
+           if target.split(".")[0] not in BELOW[name.split(".")[0]] + (name.split(".")[0],)]
+  assert not wrong, "\n".join(sorted(wrong))
+
+
+def test_no_module_imports_itself_back():
+  edges, cycles, state = graph(), [], {}
+
+  def visit(node, path):
+    state[node] = "open"
+    for target in sorted(edges[node]):
+      if state.get(target) == "open":
+        cycles.append(" -> ".join(path[path.index(target):] + [target]))
+      elif target not in state:
+        visit(target, path + [target])
+    state[node] = "done"
+
+  for node in sorted(edges):
+    if node not in state:
+      visit(node, [node])
+  assert not cycles, "\n".join(cycles)
+
+
+def test_the_walk_sees_the_imports_it_judges():
+  edges = graph()  # the walk itself: a test that finds no import could never fail
+  assert "discosyn_jax.checkpoints" in edges["discosyn_jax.loop"]
+  assert "discosyn_jax.train" in edges["tasks.registry"]  # inside a function
+  assert "tasks" in edges["experiments.presets"]
