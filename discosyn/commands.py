@@ -72,7 +72,7 @@ def cmd_render_scenes(args) -> None:
       state = env.step(state, action)
     data = env.physics.to_mjdata(jax.device_get(state.pipeline_state))
     env.task.show(env.mj_model, data, jax.device_get(state.info))
-    path = out / f"{name}.png"
+    path = out / f"{tasks.label(name)}.png"
     Image.fromarray(render.frames(env.mj_model, data)).save(path)
     print(path)
 
@@ -201,7 +201,7 @@ def cmd_render(args) -> None:
   trainer, state = loop.load_trained(args.run, tasks.trainer, backend="native")
   _check_scenes(trainer, args.run, "film")
   videos.task_index(trainer.config, args.task)  # a bad task fails before any rollout
-  name = _derived_name(args.run, run_dir, args.task, int(state.step))
+  name = _derived_name(args.run, run_dir, tasks.label(args.task), int(state.step))
   suffix = ".mp4" if args.frame is None else f"-frame{args.frame}.png"
   out = pathlib.Path(args.out) if args.out else run_dir / "videos" / f"{name}{suffix}"
   written = videos.render_policy(trainer, state, args.task, out, episodes=args.episodes,

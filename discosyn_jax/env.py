@@ -14,6 +14,17 @@ from discosyn_jax import physics
 from discosyn_jax.task import Task
 
 
+def _check_shapes(name: str, state: State) -> None:
+  """A task's functions return one observation vector and a number per metric (a task of
+  one's own is checked here, before anything is traced with it)."""
+  if len(state.obs.shape) != 1:
+    raise ValueError(f"{name}.observation returns shape {state.obs.shape}, not one vector")
+  wrong = {k: v.shape for k, v in state.metrics.items() if v.shape != ()}
+  if wrong:
+    raise ValueError(f"{name}: success and each reward term are one number per state, not "
+                     + ", ".join(f"{k} of shape {s}" for k, s in wrong.items()))
+
+
 class HandEnv(Env):
 
   def __init__(self, task: Task, backend: str = "auto", **backend_kwargs):
@@ -25,7 +36,13 @@ class HandEnv(Env):
     self._ctrl_mid, self._ctrl_half = (hi + lo) / 2, (hi - lo) / 2
     self.episode_length = task.config.episode_length
     self.dt = task.dt
-    self._obs_shape = jax.eval_shape(self.reset, jax.random.key(0)).obs.shape
+    try:
+      first = jax.eval_shape(self.reset, jax.random.key(0))
+    except (TypeError, AttributeError, KeyError, IndexError) as err:
+      raise ValueError(f"{type(task).__name__}: its functions failed on a fresh episode: "
+                       f"{type(err).__name__}: {err}") from None
+    self._obs_shape = first.obs.shape
+    _check_shapes(type(task).__name__, first)
 
   @property
   def observation_size(self) -> int:

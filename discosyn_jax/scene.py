@@ -1,6 +1,9 @@
-"""Scenes: `xml/scenes/<name>.xml` includes the arena, the hand and one task object."""
+"""Scenes: `xml/scenes/<name>.xml` includes the arena, the hand and one task object; a task
+of one's own names its object's MJCF file instead (docs/YOUR_TASK.md)."""
 
 from __future__ import annotations
+
+import pathlib
 
 import mujoco
 
@@ -14,8 +17,18 @@ from discosyn_jax import assets
 PALM_UP = ((-0.011, -0.4, 0.225), (1, 0, 0, 0, 0, -1))
 
 
-def load_spec(scene: str) -> mujoco.MjSpec:
-  """The editable spec of a scene, for tasks that set parameters before compiling."""
+def load_spec(scene: str | pathlib.Path) -> mujoco.MjSpec:
+  """The editable spec of a scene, for tasks that set parameters before compiling: a scene
+  of xml/scenes/ by name, or an object's MJCF file (a path) put in the arena with the hand."""
+  if isinstance(scene, pathlib.Path):
+    if not scene.is_file():
+      raise ValueError(f"no object MJCF file {scene}")
+    parts = [assets.xml_path("arena.xml"), assets.xml_path("hand.xml"), scene.resolve()]
+    includes = "".join(f'<include file="{path}"/>' for path in parts)
+    try:
+      return mujoco.MjSpec.from_string(f'<mujoco model="{scene.stem}">{includes}</mujoco>')
+    except ValueError as err:
+      raise ValueError(f"{scene}: {err}") from None
   return mujoco.MjSpec.from_file(str(assets.xml_path(f"scenes/{scene}.xml")))
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import abc
 import dataclasses
+import pathlib
 from typing import Any
 
 import jax
@@ -57,7 +58,9 @@ class TaskConfig:
 
 
 class Task(abc.ABC):
-  scene: str  # xml/scenes/<scene>.xml
+  scene: str | pathlib.Path  # xml/scenes/<scene>.xml, or a task's own object MJCF file
+  config_class: type = TaskConfig  # a task of one's own: its config (tasks.load)
+  summary: str = ""  # one line for `discosyn tasks`
 
   def __init__(self, config: TaskConfig):
     self.config = config

@@ -5,6 +5,9 @@ registry). Reached as `tasks.make`, `tasks.trainer`, ... (tasks/__init__.py)."""
 from __future__ import annotations
 
 import dataclasses
+import importlib
+import importlib.util
+import pathlib
 from typing import Callable
 
 import discosyn_jax  # sets XLA flags before jax is imported
@@ -90,7 +93,63 @@ FAST: dict[str, dict] = {
 
 
 
+def register(name: str, task: type[Task], default_config=None, summary: str = "",
+             env: Callable[..., Env] = HandEnv) -> str:
+  """Add a task under `name` (its config class's defaults unless `default_config` is given);
+  `tasks.make(name)` and `discosyn train --tasks NAME` then build it. Returns the name."""
+  if not (isinstance(task, type) and issubclass(task, Task)):
+    raise ValueError(f"task {name!r}: {task!r} is not a Task class (discosyn_jax.task.Task)")
+  missing = sorted(getattr(task, "__abstractmethods__", ()))
+  if missing:
+    raise ValueError(f"task {name!r}: {task.__name__} does not define {', '.join(missing)}")
+  new = Entry(task, default_config or task.config_class, summary or task.summary, env)
+  if REGISTRY.get(name, new) != new:
+    raise ValueError(f"a task named {name!r} is registered already")
+  REGISTRY[name] = new
+  return name
+
+
+def load(spec: str) -> str:
+  """Register the task of `spec`, "path/to/file.py:ClassName" or "module:ClassName" (a task
+  of one's own, outside this package: docs/YOUR_TASK.md), under its spec with the file's
+  path made absolute, so that a run's config names it wherever the run is read again."""
+  where, _, attr = spec.rpartition(":")
+  if not where or not attr:
+    raise ValueError(f"a task of one's own is FILE.py:CLASS or MODULE:CLASS, not {spec!r}")
+  if where.endswith(".py"):
+    path = pathlib.Path(where).expanduser().resolve()
+    name = f"{path}:{attr}"
+    if name in REGISTRY:
+      return name
+    if not path.is_file():
+      raise ValueError(f"no task file {where}")
+    module_spec = importlib.util.spec_from_file_location(f"discosyn_task_{path.stem}", path)
+    module = importlib.util.module_from_spec(module_spec)
+    try:
+      module_spec.loader.exec_module(module)
+    except (SyntaxError, ImportError) as err:
+      raise ValueError(f"{where}: {type(err).__name__}: {err}") from None
+  else:
+    name = spec
+    if name in REGISTRY:
+      return name
+    try:
+      module = importlib.import_module(where)
+    except ImportError as err:
+      raise ValueError(f"task {spec!r}: cannot import {where}: {err}") from None
+  if not hasattr(module, attr):
+    raise ValueError(f"{where} defines no {attr}")
+  return register(name, getattr(module, attr))
+
+
+def label(name: str) -> str:
+  """A task's name as a file name: a task of one's own by its class ("Knob")."""
+  return name.rpartition(":")[2]
+
+
 def entry(name: str) -> Entry:
+  if name not in REGISTRY and ":" in name:  # a task of one's own, named in a run's config
+    load(name)
   if name not in REGISTRY:
     raise ValueError(f"unknown task {name!r}; known tasks: {', '.join(REGISTRY)}")
   return REGISTRY[name]
@@ -140,6 +199,8 @@ def expand(names) -> list[str]:
       out += TASK_SETS[name]
     elif name in REGISTRY:
       out.append(name)
+    elif ":" in name or name.endswith(".py"):  # a task of one's own
+      out.append(load(name))
     else:
       raise ValueError(f"unknown task or task set {name!r}; tasks: {', '.join(REGISTRY)}; "
                        f"sets: {', '.join(TASK_SETS)}")

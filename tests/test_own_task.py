@@ -1,0 +1,76 @@
+"""A task of one's own, in one file outside the package (docs/YOUR_TASK.md): it trains with
+`discosyn train --tasks FILE.py:CLASS`, its runs are read again from their config, and a
+task file that is wrong is refused in one line."""
+
+import pathlib
+import shutil
+
+import pytest
+
+import tasks
+import tasks.registry as registry
+from discosyn import cli
+from discosyn_jax import config as config_lib
+from discosyn_jax import layout
+
+EXAMPLE = pathlib.Path(__file__).resolve().parents[1] / "docs" / "examples" / "knob"
+TINY = ["--num-envs", "2", "--unroll-length", "4", "--minibatches", "2", "--epochs", "1",
+        "--steps", "1", "--eval-envs", "2", "--eval-every", "0", "--checkpoint-every", "0",
+        "--backend", "native", "--no-progress"]
+
+
+def test_a_task_in_a_folder_of_its_own_trains_and_is_read_again(tmp_path, monkeypatch):
+  folder = tmp_path / "mine"
+  shutil.copytree(EXAMPLE, folder)
+  monkeypatch.chdir(tmp_path)  # a relative FILE.py, made absolute in the run's config
+  run = tmp_path / "run"
+  assert cli.main(["train", "--tasks", "mine/knob_task.py:Knob", "valve0", *TINY,
+                   "--out", str(run)]) == 0
+  spec = f"{folder / 'knob_task.py'}:Knob"
+  assert config_lib.load(run / layout.CONFIG_FILE).tasks == (spec, "valve0")
+  env = tasks.make(spec)
+  assert (env.observation_size, env.action_size) == (27, 20)
+  monkeypatch.delitem(tasks.REGISTRY, spec)  # as in a new process: loaded from the config
+  monkeypatch.chdir(folder)
+  assert cli.main(["eval", str(run), "--episodes", "2"]) == 0
+  assert spec in tasks.REGISTRY
+
+
+BROKEN = {
+    "missing.py:Knob": "no task file missing.py",
+    "knob_task.py:Door": "knob_task.py defines no Door",
+    "knob_task.py": "a task of one's own is FILE.py:CLASS or MODULE:CLASS",
+    "lazy.py:Lazy": "Lazy does not define observation, reward_terms, success",
+    "flat.py:Flat": "Flat.observation returns shape (3, 9), not one vector",
+    "notask.py:KnobConfig": "is not a Task class",
+}
+
+
+@pytest.mark.parametrize("spec", BROKEN)
+def test_a_wrong_task_file_is_one_line_and_exit_2(tmp_path, monkeypatch, capsys, spec):
+  shutil.copytree(EXAMPLE, tmp_path, dirs_exist_ok=True)
+  source = (EXAMPLE / "knob_task.py").read_text()
+  (tmp_path / "lazy.py").write_text(source.replace("class Knob(Task):", "class Lazy(Task):")
+                                    .split("  def observation")[0])
+  (tmp_path / "flat.py").write_text("import jax.numpy as jnp\nfrom knob_task import Knob\n\n\n"
+                                    "class Flat(Knob):\n  def observation(self, view, info):\n"
+                                    "    return jnp.zeros((3, 9))\n")
+  (tmp_path / "notask.py").write_text(source)
+  monkeypatch.chdir(tmp_path)
+  monkeypatch.syspath_prepend(str(tmp_path))
+  run = tmp_path / "run"
+  assert cli.main(["train", "--tasks", spec, *TINY, "--out", str(run)]) == 2
+  err = capsys.readouterr().err.strip().splitlines()
+  assert len(err) == 1 and BROKEN[spec] in err[0], err
+  assert not run.exists()
+
+
+def test_register_gives_a_short_name_and_refuses_a_second_task_under_it(monkeypatch):
+  spec = tasks.load(f"{EXAMPLE / 'knob_task.py'}:Knob")
+  knob = tasks.entry(spec).task
+  monkeypatch.setattr(registry, "REGISTRY", dict(tasks.REGISTRY))  # undone afterwards
+  assert tasks.register("knob", knob) == "knob" == tasks.register("knob", knob)  # idempotent
+  assert tasks.make("knob", backend="native").observation_size == 27
+  with pytest.raises(ValueError, match="a task named 'valve0' is registered already"):
+    tasks.register("valve0", knob)
+  assert tasks.label(spec) == "Knob" and tasks.label("valve0") == "valve0"
