@@ -14,67 +14,32 @@ from discosyn import commands
 
 
 def build_parser() -> argparse.ArgumentParser:
+  from discosyn_jax import config as config_lib
   from experiments import presets  # TrainConfig only, no JAX
 
   parser = argparse.ArgumentParser(prog="discosyn", description=__doc__)
   sub = parser.add_subparsers(dest="command", required=True)
   quick = presets.PRESETS["quickstart"]
 
-  def preset_default(field: str, what: str = "") -> str:
+  def preset_default(field: str) -> str:
     value = getattr(quick, field)
     value = " ".join(value) if isinstance(value, tuple) else value
-    return f"default: the preset's; quickstart's is {value}{what}"
+    return f"default: the preset's; quickstart's is {value}"
+
+  docs = config_lib.field_docs()  # each field's help, written once beside the field
+  choices = {"decoder": config_lib.DECODERS, "backend": config_lib.BACKENDS,
+             "physics": config_lib.PHYSICS}
 
   p = sub.add_parser("train", help="train synergies and policies (a preset, flags replace fields)")
   p.add_argument("--preset", help="a named config of experiments/presets.py: "
                  f"{', '.join(presets.PRESETS)} (default: quickstart; with --resume: the run's "
                  "own)")
-  p.add_argument("--tasks", nargs="+", help="tasks or task sets, e.g. set1 valve_cw (`discosyn "
-                 "tasks` lists them); " + preset_default("tasks"))
-  p.add_argument("--synergies", type=int, help="synergy count b, the size of z (1-20); "
-                 + preset_default("n_synergies"))
-  p.add_argument("--decoder", help="linear | mlp | identity (full-action PPO); "
-                 + preset_default("decoder"))
-  p.add_argument("--alpha1", type=float, help="weight of the entropy bonus H(pi(z|s,n)) in the "
-                 "loss (paper Eq. 2); " + preset_default("alpha1"))
-  p.add_argument("--alpha2", type=float, help="weight of the discriminator reward log q(z|a), "
-                 "added to the reward of every control step; " + preset_default("alpha2"))
-  p.add_argument("--alpha3", type=float, help="weight of the decoder entropy bonus H(p(a|z)) in "
-                 "the loss; " + preset_default("alpha3"))
-  p.add_argument("--decoder-weight-decay", type=float, help="AdamW weight decay of the decoder's "
-                 "weights, a tie-breaker between adequate synergy spaces (issue 26; 0: the paper's "
-                 "update); " + preset_default("decoder_weight_decay"))
-  p.add_argument("--decoder-weight-decay-steps", type=int, help="the decay falls linearly to "
-                 "nothing over this many train steps (0: constant); "
-                 + preset_default("decoder_weight_decay_steps"))
-  p.add_argument("--lr", type=float, help="Adam learning rate of the policy, value and decoder "
-                 "networks; " + preset_default("learning_rate"))
-  p.add_argument("--num-envs", type=int, help="parallel envs per task; "
-                 + preset_default("num_envs", " envs"))
-  p.add_argument("--unroll-length", type=int, help="control steps every env takes per train step; "
-                 + preset_default("unroll_length", " steps"))
-  p.add_argument("--minibatches", type=int, help="minibatches per PPO epoch; "
-                 + preset_default("num_minibatches"))
-  p.add_argument("--epochs", type=int, help="PPO epochs over each train step's samples; "
-                 + preset_default("update_epochs"))
-  p.add_argument("--steps", type=int, help="train steps in all (a resumed run counts those done); "
-                 "one train step is tasks x num-envs x unroll-length env (control) steps, "
-                 f"quickstart's {quick.env_steps_per_train_step:,}; " + preset_default("steps"))
-  p.add_argument("--seed", type=int, help="seed of the initial networks, initial states and "
-                 "training noise; " + preset_default("seed"))
-  p.add_argument("--eval-every", type=int, help="train steps between deterministic evaluations, "
-                 "0: only at the end; " + preset_default("eval_every", " train steps"))
-  p.add_argument("--eval-envs", type=int, help="episodes per task in an evaluation; "
-                 + preset_default("eval_envs", " episodes"))
-  p.add_argument("--checkpoint-every", type=int, help="train steps between checkpoints, 0: only "
-                 "the final one; " + preset_default("checkpoint_every", " train steps"))
-  p.add_argument("--backend", choices=["auto", "native", "mjx"], help="physics: native (MuJoCo C, "
-                 "CPU), mjx, or auto (native on a CPU, mjx on an accelerator); "
-                 + preset_default("backend"))
-  p.add_argument("--physics", choices=["fast", "reference"], help="the tasks' physics: fast "
-                 "(each task's cheapest faithful setting) or reference (4 ms x 10 substeps, the "
-                 "runs before 2026-12-02); docs/BENCHMARKS.md, 'Physics settings'; "
-                 + preset_default("physics"))
+  p.add_argument("--tasks", nargs="+", help=f"{docs['tasks']}; or FILE.py:CLASS, a task of "
+                 "one's own (docs/YOUR_TASK.md); " + preset_default("tasks"))
+  for flag, field in commands.TRAIN_FLAGS.items():  # the rest of the fields' flags
+    kind = type(getattr(quick, field))
+    p.add_argument(f"--{flag.replace('_', '-')}", type=None if kind is str else kind,
+                   choices=choices.get(field), help=f"{docs[field]}; {preset_default(field)}")
   p.add_argument("--decoder-from", help="learn in the frozen synergy space of a run folder or a "
                  "synergy file (.npz): its decoder, no discriminator bonus or decoder entropy "
                  "(default: none, the decoder is learned)")

@@ -77,8 +77,9 @@ def cmd_render_scenes(args) -> None:
     print(path)
 
 
-# train flags -> TrainConfig fields; a flag left out keeps the preset's value
-_TRAIN_FLAGS = {
+# train flags -> TrainConfig fields (cli.py writes their help from the fields' docs); a flag
+# left out keeps the preset's value
+TRAIN_FLAGS = {
     "synergies": "n_synergies", "decoder": "decoder", "alpha1": "alpha1", "alpha2": "alpha2",
     "alpha3": "alpha3", "num_envs": "num_envs", "unroll_length": "unroll_length",
     "minibatches": "num_minibatches", "epochs": "update_epochs", "lr": "learning_rate",
@@ -97,7 +98,7 @@ def train_config(args, base=None):
 
   if base is None or args.preset is not None:
     base = presets.preset("quickstart" if args.preset is None else args.preset)
-  changes = {field: getattr(args, flag) for flag, field in _TRAIN_FLAGS.items()
+  changes = {field: getattr(args, flag) for flag, field in TRAIN_FLAGS.items()
              if getattr(args, flag) is not None}
   if args.tasks:
     changes["tasks"] = tuple(tasks.expand(args.tasks))

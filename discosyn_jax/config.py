@@ -10,11 +10,16 @@ from __future__ import annotations
 import dataclasses
 import json
 import pathlib
+import functools
+import inspect
+import io
+import tokenize
 from typing import Any
 
 from discosyn_jax import atomic, checks
 
 DECODERS = ("linear", "mlp", "identity")
+BACKENDS = ("auto", "native", "mjx")  # auto: native on a CPU, mjx on an accelerator
 CONTROL_DT = 0.04  # s: one control step of every task
 # The physics of the tasks (tasks/__init__.py, physics_overrides): "reference" is 10 MuJoCo
 # steps of 4 ms per control step for every task, what every run before this field ran;
@@ -36,9 +41,13 @@ ADDED = {"squash_z": False, "physics": "reference", "reset_pool": False, "decode
 
 @dataclasses.dataclass(frozen=True)
 class TrainConfig:
-  # what is learned
+  # Each field's comment (the lines right above it and the one beside it) is its
+  # documentation: `discosyn train --help` shows it (field_docs below). "# -- " heads a group.
+  # -- what is learned --
+  # tasks or task sets, e.g. set1 valve_cw (`discosyn tasks` lists them)
   tasks: tuple[str, ...] = ("valve0", "valve1", "valve2", "valve3")
-  n_synergies: int = 3  # b, the dimension of z; the action size for the identity decoder
+  # synergy count b, the size of z (1-20); the action size for the identity decoder
+  n_synergies: int = 3
   decoder: str = "linear"  # linear (a b x 20 matrix) | mlp | identity (full-action PPO)
   decoder_bias: bool = True  # linear decoder: a = W z + c rather than W z
   freeze_decoder: bool = False  # decoder parameters outside the optimiser
@@ -50,31 +59,32 @@ class TrainConfig:
   # the decoder reads tanh(z): synergy activations bounded to [-1, 1], so that the heads
   # cannot make up for any decoder by driving z far out (issue 13's hypothesis)
   squash_z: bool = False
-  # decoupled weight decay of the decoder's weights (AdamW): among the decoders that serve
-  # the tasks equally well, the smallest, whose columns keep only the directions the tasks
-  # use; a tie-breaker between adequate synergy spaces (issue 26). 0: the paper's update
+  # AdamW weight decay of the decoder's weights, a tie-breaker between adequate synergy
+  # spaces: among the decoders that serve the tasks equally well, the smallest (issue 26;
+  # 0: the paper's update)
   decoder_weight_decay: float = 0.0
-  # > 0: the decay falls linearly to nothing over this many train steps, then stays off:
-  # the tie is broken by the decay integrated early, and a decay still on at the end costs
-  # the decoder its reach (issue 26); 0: constant. Counted in train steps, so a resumed run
-  # keeps its schedule
+  # the decay falls linearly to nothing over this many train steps, then stays off (0:
+  # constant): the tie is broken by the decay integrated early, and a decay still on at the
+  # end costs the decoder its reach (issue 26); a resumed run keeps its schedule
   decoder_weight_decay_steps: int = 0
-  # the extended reward, paper Eq. 2: alpha1 H(pi(z|s,n)) + alpha2 log q(z|a) + alpha3 H(p(a|z))
-  alpha1: float = 1e-3
+  # -- the extended reward, paper Eq. 2: alpha1 H(pi(z|s,n)) + alpha2 log q(z|a) + alpha3 H(p(a|z)) --
+  alpha1: float = 1e-3  # weight of the entropy bonus H(pi(z|s,n)) in the loss
+  # weight of the discriminator reward log q(z|a), added to the reward of every control step
   alpha2: float = 1e-2
-  alpha3: float = 1e-3
-  # networks
+  alpha3: float = 1e-3  # weight of the decoder entropy bonus H(p(a|z)) in the loss
+  # -- networks --
   policy_hidden: tuple[int, ...] = (128, 128)
   value_hidden: tuple[int, ...] = (128, 128)
   decoder_hidden: tuple[int, ...] = (128, 128)  # mlp decoder only
   discriminator_hidden: tuple[int, ...] = (128, 128)
   init_z_std: float = 1.0  # initial std of pi(z|s,n)
   init_action_std: float = 0.3  # initial std of p(a|z)
-  # PPO
-  num_envs: int = 64  # per task
-  unroll_length: int = 20  # control steps per env per train step
-  num_minibatches: int = 4
-  update_epochs: int = 4
+  # -- PPO --
+  num_envs: int = 64  # parallel envs per task
+  unroll_length: int = 20  # control steps every env takes per train step
+  num_minibatches: int = 4  # minibatches per PPO epoch
+  update_epochs: int = 4  # PPO epochs over each train step's samples
+  # Adam learning rate of the policy, value and decoder networks
   learning_rate: float = 3e-4
   discriminator_learning_rate: float = 3e-4
   discount: float = 0.97
@@ -84,15 +94,22 @@ class TrainConfig:
   max_grad_norm: float = 1.0
   reward_scaling: float = 1.0
   normalize_observations: bool = True
-  # the run
-  steps: int = 100  # train steps; each one is len(tasks) * num_envs * unroll_length env steps
-  seed: int = 0
-  backend: str = "auto"  # physics: auto | native | mjx
-  physics: str = "fast"  # the tasks' physics settings: fast | reference (PHYSICS above)
+  # -- the run --
+  # train steps in all (a resumed run counts those done); one train step is
+  # len(tasks) x num_envs x unroll_length env (control) steps
+  steps: int = 100
+  seed: int = 0  # seed of the initial networks, initial states and training noise
+  # physics backend: native (MuJoCo C, CPU), mjx, or auto (native on a CPU, mjx on an
+  # accelerator)
+  backend: str = "auto"
+  # the tasks' physics: fast (each task's cheapest faithful setting) or reference (4 ms x 10
+  # substeps, the runs before 2026-12-02); docs/BENCHMARKS.md, "Physics settings"
+  physics: str = "fast"
   # episodes restart from num_envs initial states per task made at init, drawn at random,
   # not from a fresh reset: MJX's train step then compiles no mjx.forward (wrappers.py)
   reset_pool: bool = False
-  eval_every: int = 20  # train steps between deterministic evaluations (0: only at the end)
+  # train steps between deterministic evaluations (0: only at the end)
+  eval_every: int = 20
   eval_envs: int = 32  # episodes per task in an evaluation
   checkpoint_every: int = 50  # train steps between checkpoints (0: only the final one)
   keep_checkpoints: int = 3  # periodic checkpoints kept besides `final`
@@ -222,3 +239,25 @@ def mismatches(saved: TrainConfig, requested: TrainConfig) -> list[str]:
   return [f"{name} is {getattr(saved, name)!r} in the run but {getattr(requested, name)!r} here"
           for name in saved.to_dict()
           if name not in RESUMABLE and getattr(saved, name) != getattr(requested, name)]
+
+
+@functools.cache
+def field_docs() -> dict[str, str]:
+  """Each TrainConfig field's documentation: its comment lines in the class (those right
+  above the field, back to a "# --" group heading, and the one beside it), read from the
+  source, so that the command line's help and the code say one thing."""
+  lines = inspect.getsource(TrainConfig).splitlines()
+  names = {f.name for f in dataclasses.fields(TrainConfig)}
+  docs, above = {}, []
+  for line in lines:
+    text = line.strip()
+    if text.startswith("#"):
+      above = [] if text.startswith("# --") else above + [text[1:].strip()]
+      continue
+    name = text.split(":", 1)[0]
+    if name in names:
+      beside = [tok.string[1:].strip() for tok in tokenize.generate_tokens(io.StringIO(text).readline)
+                if tok.type == tokenize.COMMENT]
+      docs[name] = " ".join(above + beside)
+    above = []
+  return docs

@@ -5,6 +5,7 @@ import subprocess
 import sys
 
 from discosyn import cli, commands
+from discosyn_jax import config as config_lib
 from experiments import presets
 from tests.helpers import ROOT
 
@@ -83,3 +84,13 @@ def test_a_finished_run_ends_with_the_next_commands_filled_in(tmp_path):
   assert f"discosyn train --out {run} --resume --steps 80" in text
   ppo = commands.next_commands(tmp_path, 40, config.replace(decoder="identity"), results)
   assert "synergies" not in ppo
+
+
+def test_the_train_flags_help_is_their_fields_own_documentation():
+  docs = config_lib.field_docs()
+  assert docs["alpha2"].startswith("weight of the discriminator reward log q(z|a)")
+  assert docs["tasks"].startswith("tasks or task sets")  # a "# --" group heading is not a doc
+  assert docs["decoder"] == "linear (a b x 20 matrix) | mlp | identity (full-action PPO)"
+  helps = {a.dest: a.help for a in subcommands(cli.build_parser())["train"]._actions}
+  for flag, field in commands.TRAIN_FLAGS.items():
+    assert docs[field] and helps[flag].startswith(docs[field] + "; default: the preset's"), flag

@@ -19,6 +19,12 @@ TINY = ["--num-envs", "2", "--unroll-length", "4", "--minibatches", "2", "--epoc
         "--backend", "native", "--no-progress"]
 
 
+@pytest.fixture(autouse=True)
+def registry_restored(monkeypatch):
+  """The tasks these tests register are forgotten after each (the registry is per process)."""
+  monkeypatch.setattr(registry, "REGISTRY", dict(registry.REGISTRY))
+
+
 def test_a_task_in_a_folder_of_its_own_trains_and_is_read_again(tmp_path, monkeypatch):
   folder = tmp_path / "mine"
   shutil.copytree(EXAMPLE, folder)
@@ -68,7 +74,6 @@ def test_a_wrong_task_file_is_one_line_and_exit_2(tmp_path, monkeypatch, capsys,
 def test_register_gives_a_short_name_and_refuses_a_second_task_under_it(monkeypatch):
   spec = tasks.load(f"{EXAMPLE / 'knob_task.py'}:Knob")
   knob = tasks.entry(spec).task
-  monkeypatch.setattr(registry, "REGISTRY", dict(tasks.REGISTRY))  # undone afterwards
   assert tasks.register("knob", knob) == "knob" == tasks.register("knob", knob)  # idempotent
   assert tasks.make("knob", backend="native").observation_size == 27
   with pytest.raises(ValueError, match="a task named 'valve0' is registered already"):

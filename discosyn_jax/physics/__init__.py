@@ -17,10 +17,11 @@ from __future__ import annotations
 import jax
 import mujoco
 
+from discosyn_jax.config import BACKENDS as _CHOICES
 from discosyn_jax.physics.view import PhysicsView
 
 __all__ = ["BACKENDS", "PhysicsView", "make_backend", "resolve"]
-BACKENDS = ("native", "mjx")
+BACKENDS = _CHOICES[1:]  # "auto" resolves to one of them
 
 
 def resolve(backend: str) -> str:
