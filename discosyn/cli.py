@@ -57,7 +57,7 @@ def build_parser() -> argparse.ArgumentParser:
   p = sub.add_parser("eval", help="evaluate a run (its latest checkpoint) or one checkpoint")
   p.add_argument("run", help="a run directory or a checkpoint folder in one")
   p.add_argument("--episodes", type=int, help="episodes per task (default: the run's eval_envs)")
-  p.add_argument("--backend", choices=["auto", "native", "mjx"],
+  p.add_argument("--backend", choices=config_lib.BACKENDS,
                  help="physics backend (default: the run's)")
   p.set_defaults(fn=commands.cmd_eval)
 
@@ -127,7 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
 
   p = sub.add_parser("demo", help="build task scenes, step them with random actions, print figures")
   p.add_argument("tasks", nargs="*", default=["set1"], help="tasks or task sets (default: set1)")
-  p.add_argument("--backend", default="auto", choices=["auto", "native", "mjx"],
+  p.add_argument("--backend", default="auto", choices=config_lib.BACKENDS,
                  help="physics backend (default: %(default)s: native on a CPU, mjx on an "
                  "accelerator)")
   p.add_argument("--batch", type=int, default=16, help="parallel envs per task (default: "

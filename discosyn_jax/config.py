@@ -21,7 +21,7 @@ from discosyn_jax import atomic, checks
 DECODERS = ("linear", "mlp", "identity")
 BACKENDS = ("auto", "native", "mjx")  # auto: native on a CPU, mjx on an accelerator
 CONTROL_DT = 0.04  # s: one control step of every task
-# The physics of the tasks (tasks/__init__.py, physics_overrides): "reference" is 10 MuJoCo
+# The physics of the tasks (tasks/registry.py, physics_overrides): "reference" is 10 MuJoCo
 # steps of 4 ms per control step for every task, what every run before this field ran;
 # "fast" is each task's cheapest setting that stays faithful to the reference
 # (docs/BENCHMARKS.md, "Physics settings"). A profile never changes once runs use it: a

@@ -160,7 +160,7 @@ def bench_row(config, args) -> dict:
   import tasks
 
   trainer = tasks.trainer(config, devices=args.devices) if args.train else None
-  envs = trainer.envs if trainer else _envs(config)
+  envs = trainer.envs if trainer else tasks.make_envs(config)
   clock = CallbackClock(envs)
   T, B = config.unroll_length, config.num_envs
   total = len(envs) * B * T  # env steps of one pass over every task
@@ -207,12 +207,6 @@ def bench_row(config, args) -> dict:
                update_share=statistics.median(
                    [u * r / config.env_steps_per_train_step for u, r in zip(updates, train_rates)]))
   return row
-
-
-def _envs(config):
-  import tasks
-
-  return tasks.make_envs(config)
 
 
 def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.ArgumentParser:

@@ -1,6 +1,6 @@
 """The task registry: `make(name)` builds a task's environment; `trainer(config)` builds a
 Trainer on the envs of `config.tasks` (the library's Trainer is given its envs: it knows no
-registry). Reached as `tasks.make`, `tasks.trainer`, ... (tasks/__init__.py)."""
+registry). Reached as `tasks.make`, `tasks.trainer`, ... through tasks/__init__.py."""
 
 from __future__ import annotations
 
