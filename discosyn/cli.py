@@ -27,7 +27,8 @@ def build_parser() -> argparse.ArgumentParser:
     return f"default: the preset's; quickstart's is {value}"
 
   docs = config_lib.field_docs()  # each field's help, written once beside the field
-  choices = {"decoder": config_lib.DECODERS, "backend": config_lib.BACKENDS,
+  choices = {"decoder": config_lib.DECODERS, "decoder_init": config_lib.DECODER_INITS,
+             "backend": config_lib.BACKENDS,
              "physics": config_lib.PHYSICS}
 
   p = sub.add_parser("train", help="train synergies and policies (a preset, flags replace fields)")
@@ -36,6 +37,7 @@ def build_parser() -> argparse.ArgumentParser:
                  "own)")
   p.add_argument("--tasks", nargs="+", help=f"{docs['tasks']}; or FILE.py:CLASS, a task of "
                  "one's own (docs/YOUR_TASK.md); " + preset_default("tasks"))
+  p.add_argument("--hand", help=f"{docs['hand']}; {preset_default('hand')}")
   for flag, field in commands.TRAIN_FLAGS.items():  # the rest of the fields' flags
     kind = type(getattr(quick, field))
     p.add_argument(f"--{flag.replace('_', '-')}", type=None if kind is str else kind,
@@ -105,6 +107,9 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("--methods", nargs="+", metavar="METHOD",
                  help="only these methods' runs and the runs they need, e.g. DiscoSyn3-L "
                  "Random3-L, or PCA4 (with its PPO run and fit); default: every method")
+  p.add_argument("--hand", default="shadow20", help="every run on this hand: shadow20 | leap16 | "
+                 "path/to/hand.xml[:PALM_SITE]; folders end in <hand>-seed<n> on another than "
+                 "ours (default: %(default)s)")
   p.add_argument("--progress", action="store_true", help="a progress bar per run")
   p.set_defaults(fn=commands.cmd_experiment)
 
@@ -134,6 +139,8 @@ def build_parser() -> argparse.ArgumentParser:
                  "%(default)s)")
   p.add_argument("--seed", type=int, default=0, help="seed of the initial states and actions "
                  "(default: %(default)s)")
+  p.add_argument("--hand", default="shadow20", help="shadow20 | leap16 | path/to/hand.xml"
+                 "[:PALM_SITE] (docs/YOUR_HAND.md; default: %(default)s)")
   p.set_defaults(fn=commands.cmd_demo)
 
   p = sub.add_parser("tasks", help="list the tasks with observation size and set membership")
@@ -145,6 +152,8 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("--step", type=int, default=14, help="control steps of the task's scripted motion "
                  "before the picture (default: %(default)s)")
   p.add_argument("--seed", type=int, default=0, help="draws the initial state (default: %(default)s)")
+  p.add_argument("--hand", default="shadow20", help="shadow20 | leap16 | path/to/hand.xml"
+                 "[:PALM_SITE] (docs/YOUR_HAND.md; default: %(default)s)")
   p.set_defaults(fn=commands.cmd_render_scenes)
   add_bench_parser(sub)
   return parser

@@ -36,7 +36,7 @@ def cmd_demo(args) -> None:
         f"{'return':>7s} {'success':>7s} {'diverged':>8s}")
   for name in tasks.expand(args.tasks):
     start = time.perf_counter()
-    env = tasks.make(name, backend=args.backend)
+    env = tasks.make(name, backend=args.backend, hand=args.hand)
     built = time.perf_counter() - start
     uniform = lambda t, key, batch, env=env: jax.random.uniform(
         key, (batch, env.action_size), minval=-1, maxval=1)
@@ -58,15 +58,18 @@ def cmd_render_scenes(args) -> None:
   from PIL import Image
 
   import tasks
-  from discosyn_jax import render, scripted
+  from discosyn_jax import hands, render, scripted
 
   out = pathlib.Path(args.out)
-  names = tasks.expand(args.tasks)  # a bad name fails before the folder is made
+  names = tasks.expand(args.tasks)  # a bad name or hand fails before the folder is made
+  hand = hands.load(args.hand)
   out.mkdir(parents=True, exist_ok=True)
   for name in names:
-    env = tasks.make(name, backend="native")
-    # a frame from the task's scripted motion (valves: the middle of a stroke, fingers dipped)
-    actions = jnp.asarray(scripted.for_task(name, args.step, env.dt))
+    env = tasks.make(name, backend="native", hand=hand)
+    # a frame from the task's scripted motion (valves: the middle of a stroke, fingers dipped);
+    # a hand of one's own has none: its initial pose
+    actions = (jnp.asarray(scripted.for_task(name, args.step, env.dt, hand.name))
+               if hand.name in hands.SHIPPED else [])
     state = env.reset(jax.random.PRNGKey(args.seed))
     for action in actions:
       state = env.step(state, action)
@@ -88,6 +91,7 @@ TRAIN_FLAGS = {
     "eval_envs": "eval_envs", "checkpoint_every": "checkpoint_every",
     "decoder_weight_decay": "decoder_weight_decay",
     "decoder_weight_decay_steps": "decoder_weight_decay_steps",
+    "decoder_init": "decoder_init",
 }
 
 
@@ -102,6 +106,10 @@ def train_config(args, base=None):
              if getattr(args, flag) is not None}
   if args.tasks:
     changes["tasks"] = tuple(tasks.expand(args.tasks))
+  if args.hand:
+    from discosyn_jax import hands
+
+    changes["hand"] = hands.load(args.hand).name  # checked before the folder is made
   if args.decoder_from:
     from discosyn_jax import synergies
 
@@ -221,10 +229,10 @@ def cmd_experiment(args) -> None:
   seeds = tuple(args.seeds) if args.seeds else getattr(paper.SCALES.get(args.scale), "seeds", (0,))
   only = f", methods {' '.join(args.methods)}" if args.methods else ""
   print(f"experiment {args.name} at scale {args.scale}, seeds {' '.join(map(str, seeds))}{only}, "
-        f"in {out}")
+        f"on {args.hand}, in {out}")
   start = time.perf_counter()
   paper.run(args.name, out, args.scale, seeds, decoder_from=args.decoder_from,
-            methods=args.methods, progress=args.progress)
+            methods=args.methods, hand=args.hand, progress=args.progress)
   print(f"experiment {args.name} finished in {(time.perf_counter() - start) / 60:.1f} min")
 
 

@@ -8,17 +8,17 @@ import pathlib
 
 @functools.cache
 def xml_dir() -> pathlib.Path:
-  """The folder holding hand.xml, arena.xml and objects/.
+  """The folder holding arena.xml, hands/ and objects/.
 
   A checkout (or an editable install) reads the repository's top-level `xml/`;
   a wheel carries the same files as the package data `discosyn_jax/xml/`.
   """
   here = pathlib.Path(__file__).resolve().parent
   for candidate in (here / "xml", here.parent / "xml"):
-    if (candidate / "hand.xml").is_file():
+    if (candidate / "arena.xml").is_file():
       return candidate
   raise FileNotFoundError(
-      f"hand.xml not found beside {here}: the package was installed without its XML files"
+      f"arena.xml not found beside {here}: the package was installed without its XML files"
   )
 
 

@@ -19,6 +19,7 @@ from typing import Any
 from discosyn_jax import atomic, checks
 
 DECODERS = ("linear", "mlp", "identity")
+DECODER_INITS = ("random", "physics")
 BACKENDS = ("auto", "native", "mjx")  # auto: native on a CPU, mjx on an accelerator
 CONTROL_DT = 0.04  # s: one control step of every task
 # The physics of the tasks (tasks/registry.py, physics_overrides): "reference" is 10 MuJoCo
@@ -36,7 +37,8 @@ MAX_STEPS = 2**31 - 1  # the state counts train steps in an int32
 # config.json without them is refused (never filled with today's default) until
 # `discosyn upgrade RUN` writes these values into it (upgrade below).
 ADDED = {"squash_z": False, "physics": "reference", "reset_pool": False, "decoder_weight_decay": 0.0,
-         "decoder_weight_decay_steps": 0}
+         "decoder_weight_decay_steps": 0, "hand": "shadow20",
+         "decoder_init": "random"}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -46,11 +48,18 @@ class TrainConfig:
   # -- what is learned --
   # tasks or task sets, e.g. set1 valve_cw (`discosyn tasks` lists them)
   tasks: tuple[str, ...] = ("valve0", "valve1", "valve2", "valve3")
+  # the hand: shadow20 (ours, the paper's), leap16 (a LEAP-like four-finger hand), or an MJCF
+  # file of one's own, path/to/hand.xml[:PALM_SITE] (docs/YOUR_HAND.md)
+  hand: str = "shadow20"
   # synergy count b, the size of z (1-20); the action size for the identity decoder
   n_synergies: int = 3
   decoder: str = "linear"  # linear (a b x 20 matrix) | mlp | identity (full-action PPO)
   decoder_bias: bool = True  # linear decoder: a = W z + c rather than W z
   freeze_decoder: bool = False  # decoder parameters outside the optimiser
+  # the start of a linear decoder: random (the paper's), or physics: each seed's random
+  # decoder turned into the subspace of the actions that move the tasks' objects most, the
+  # same subspace for every seed (physics_prior.py; issue 26)
+  decoder_init: str = "random"
   # the initial decoder: a run directory (its latest checkpoint's decoder) or a synergy file
   # written by discosyn_jax.synergies (PCA / autoencoder); "" starts from a random one
   decoder_from: str = ""
@@ -126,6 +135,8 @@ class TrainConfig:
       raise ValueError("no tasks given")
     if len(set(self.tasks)) != len(self.tasks):
       raise ValueError(f"a task is listed twice: {', '.join(self.tasks)}")
+    if not self.hand:
+      raise ValueError("no hand given")
     if self.decoder not in DECODERS:
       raise ValueError(f"unknown decoder {self.decoder!r}; known: {', '.join(DECODERS)}")
     if self.decoder == "identity":
@@ -134,6 +145,11 @@ class TrainConfig:
                          "noise: set alpha2 = alpha3 = 0")
     elif not 1 <= self.n_synergies <= 20:
       raise ValueError(f"the synergy count must be between 1 and 20, not {self.n_synergies}")
+    if self.decoder_init not in DECODER_INITS:
+      raise ValueError(f"unknown decoder_init {self.decoder_init!r}; known: {', '.join(DECODER_INITS)}")
+    if self.decoder_init == "physics" and (self.decoder != "linear" or self.decoder_from):
+      raise ValueError("the physics prior starts a linear decoder of its own: decoder linear, "
+                       "no decoder_from")
     if self.decoder_from and self.decoder == "identity":
       raise ValueError("the identity decoder (full-action PPO) cannot take a decoder_from")
     if self.freeze_decoder and (self.decoder_weight_decay or self.decoder_weight_decay_steps):

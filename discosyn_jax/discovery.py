@@ -27,10 +27,14 @@ def learned_basis(run_dir: pathlib.Path) -> np.ndarray | None:
   return synergies.basis(meta, params)
 
 
-def initial_basis(config: TrainConfig, action_size: int = 20) -> np.ndarray | None:
-  """The synergy basis a run of `config` starts from; None when its decoder_from is gone."""
+def initial_basis(config: TrainConfig, action_size: int) -> np.ndarray | None:
+  """The synergy basis a run of `config` (on envs of `action_size` actions) starts from; None
+  when its decoder_from is gone, or for a start from the physics prior (the same subspace
+  for every seed, by construction)."""
   from discosyn_jax import train
 
+  if config.decoder_init == "physics":  # the prior needs the envs; every seed starts in it
+    return None
   if config.decoder_from:
     try:
       params = synergies.starting_decoder(config)

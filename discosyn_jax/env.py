@@ -1,7 +1,8 @@
 """The hand environment: a Task on a physics backend, with Brax's `Env` interface.
 
 Brax's training wrappers (episode length, auto-reset, vmap) work on it unchanged.
-Actions are 20-D in [-1, 1]: ctrl = mid + a * half-range of each actuator's joint range.
+Actions are one per actuator of the hand (20 for ours) in [-1, 1]: ctrl = mid + a *
+half-range of each actuator's ctrlrange.
 """
 
 from __future__ import annotations
@@ -10,7 +11,7 @@ import jax
 import jax.numpy as jnp
 from brax.envs.base import Env, State
 
-from discosyn_jax import physics
+from discosyn_jax import hands, physics
 from discosyn_jax.task import Task
 
 
@@ -27,9 +28,11 @@ def _check_shapes(name: str, state: State) -> None:
 
 class HandEnv(Env):
 
-  def __init__(self, task: Task, backend: str = "auto", **backend_kwargs):
+  def __init__(self, task: Task, backend: str = "auto", hand: str | hands.Hand = hands.DEFAULT,
+               **backend_kwargs):
     self.task = task
-    self.mj_model = task.build_model()
+    self.hand = hands.load(hand)
+    self.mj_model = task.build_model(self.hand)
     self.physics = physics.make_backend(
         backend, self.mj_model, task.config.n_substeps, **backend_kwargs)
     lo, hi = (jnp.asarray(self.mj_model.actuator_ctrlrange[:, i], jnp.float32) for i in (0, 1))

@@ -8,6 +8,7 @@ also draws the training curves (plots.py).
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import pathlib
@@ -18,10 +19,11 @@ from typing import Any, Callable
 
 import jax
 
-from discosyn_jax import checkpoints, checks, evaluation, layout, logs, plots, run_folder, runs, synergies
+from discosyn_jax import (checkpoints, checks, evaluation, layout, logs, physics_prior, plots,
+                          run_folder, runs, synergies)
 from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
-from discosyn_jax.train import Trainer, TrainState
+from discosyn_jax.train import Trainer, TrainState, random_decoder
 
 
 
@@ -34,6 +36,24 @@ class WriteFailed(ValueError):
   checkpoint is kept, and the message says where it is."""
 
 
+def starting_decoder(trainer: Trainer) -> dict | None:
+  """The decoder a fresh run starts from: its `decoder_from`, the physics prior's start
+  (physics_prior.py, computed once per trainer), or None (the Trainer's random one)."""
+  config = trainer.config
+  if config.decoder_init == "physics":
+    return _prior_start(trainer)
+  return synergies.starting_decoder(config)
+
+
+@functools.lru_cache(maxsize=2)
+def _prior_start(trainer: Trainer) -> dict | None:
+  config = trainer.config
+  if config.n_synergies >= trainer.action_size:  # W spans every action: nothing to choose
+    return None
+  prior = physics_prior.basis(trainer.envs, config.n_synergies)
+  return physics_prior.start(random_decoder(config, trainer.action_size), prior)
+
+
 def decoder_reference(trainer: Trainer, state: TrainState, log=print):
   """The parameters whose decoder a run's movement is measured from: its initial decoder
   (for a frozen one, the decoder itself). None without a decoder, or when a fine-tuned
@@ -44,7 +64,7 @@ def decoder_reference(trainer: Trainer, state: TrainState, log=print):
   if config.freeze_decoder:
     return jax.tree.map(lambda x: x.copy(), state.params)  # train_step donates the state
   try:
-    return trainer.initial_params(decoder_params=synergies.starting_decoder(config))
+    return trainer.initial_params(decoder_params=starting_decoder(trainer))
   except ValueError as e:
     log(f"no decoder movement in the logs: {e}")
     return None
@@ -103,6 +123,8 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *,
   config = run_folder.run_config(run_dir, config, resume, force)
   trainer = make_trainer(config)
   checks.memory(config, trainer.envs)
+  if config.decoder_init == "physics":
+    physics_prior.check(trainer.envs)
   with runs.Writer(run_dir) as writer:
     # again, now that it is ours: another process may have made or replaced a run there
     config = run_folder.run_config(run_dir, config, resume, force)
@@ -223,7 +245,12 @@ def _start(trainer: Trainer, run_dir: pathlib.Path, resume: bool, log):
       log(f"resumed from {checkpoint} at step {int(state.step)}")
       return checkpoint, state
     log(f"{run_dir} holds no good checkpoint: starting from step 0")
-  return None, trainer.init(decoder_params=synergies.starting_decoder(trainer.config))
+  start = time.perf_counter()
+  decoder = starting_decoder(trainer)
+  if trainer.config.decoder_init == "physics":
+    log(f"the decoder starts in the physics prior's subspace (made in "
+        f"{time.perf_counter() - start:.0f} s)")
+  return None, trainer.init(decoder_params=decoder)
 
 
 def _evaluates_at(config: TrainConfig, step: int) -> bool:

@@ -9,7 +9,7 @@ import jax.numpy as jnp
 def run_episode(env, keys, policy, steps=None, seed: int = 7):
   """Reset a batch of envs and run `steps` control steps (default: one episode).
 
-  policy(t, key, batch) -> (batch, 20) actions. Returns (the reset state, the per-step
+  policy(t, key, batch) -> (batch, action size) actions. Returns (the reset state, the per-step
   states stacked along a leading time axis); no auto-reset: a terminated env keeps stepping.
   """
   return episode_fn(env, policy, steps, seed)(keys)

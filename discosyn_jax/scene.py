@@ -1,41 +1,69 @@
-"""Scenes: `xml/scenes/<name>.xml` includes the arena, the hand and one task object; a task
-of one's own names its object's MJCF file instead (docs/YOUR_TASK.md)."""
+"""Scenes: the arena (xml/arena.xml), a hand (hands.py) and one task object, composed here.
+
+The object is `xml/objects/<name>.xml` for our tasks, or a task's own object MJCF file (a
+path, docs/YOUR_TASK.md); the scene named "hand" has none. The object keeps its names (a
+task looks up "valve"); the hand's get the prefix hands.PREFIX. Each part's files (meshes)
+are found beside its own MJCF file.
+"""
 
 from __future__ import annotations
 
 import pathlib
+import warnings
 
 import mujoco
 
-from discosyn_jax import assets
-
-# Where the forearm (the hand's fixed root) is mounted: position and xyaxes in the world.
-# Palm down (hand.xml's own pose): the palm-frame point (0.011, 0, 0.11), the middle of the
-# knuckle line, lies at world (0, 0, 0.225) and the palm faces -z.
-# Palm up, for objects that rest on the palm: the same knuckle point, the palm facing +z
-# (palm x -> world +x, palm y -> world -z); the palm's surface is at world z 0.2361.
-PALM_UP = ((-0.011, -0.4, 0.225), (1, 0, 0, 0, 0, -1))
+from discosyn_jax import assets, hands
 
 
-def load_spec(scene: str | pathlib.Path) -> mujoco.MjSpec:
-  """The editable spec of a scene, for tasks that set parameters before compiling: a scene
-  of xml/scenes/ by name, or an object's MJCF file (a path) put in the arena with the hand."""
+# An object keeps its names: MuJoCo then warns, at the attach and at every compile, that the
+# spec may not save back to XML, which is never done here.
+warnings.filterwarnings("ignore", message="Attaching a spec with an empty prefix")
+
+
+def _attach_unprefixed(spec: mujoco.MjSpec, child: mujoco.MjSpec) -> None:
+  """Attach `child` to the world keeping its names. MuJoCo's default warning handler would
+  also write that warning to MUJOCO_LOG.TXT in the working folder: held off for the call."""
+  handler = mujoco.get_mju_user_warning()
+  mujoco.set_mju_user_warning(lambda message: None)
+  try:
+    spec.attach(child, frame=spec.worldbody.add_frame(), prefix="")
+  finally:
+    mujoco.set_mju_user_warning(handler)
+
+
+def _object(scene: str | pathlib.Path) -> mujoco.MjSpec:
   if isinstance(scene, pathlib.Path):
     if not scene.is_file():
       raise ValueError(f"no object MJCF file {scene}")
-    parts = [assets.xml_path("arena.xml"), assets.xml_path("hand.xml"), scene.resolve()]
-    includes = "".join(f'<include file="{path}"/>' for path in parts)
     try:
-      return mujoco.MjSpec.from_string(f'<mujoco model="{scene.stem}">{includes}</mujoco>')
+      return mujoco.MjSpec.from_file(str(scene.resolve()))
     except ValueError as err:
-      raise ValueError(f"{scene}: {err}") from None
-  return mujoco.MjSpec.from_file(str(assets.xml_path(f"scenes/{scene}.xml")))
+      raise ValueError(f"{scene}: {str(err).strip()}") from None
+  return mujoco.MjSpec.from_file(str(assets.xml_path(f"objects/{scene}.xml")))
 
 
-def mount_hand(spec: mujoco.MjSpec, mount: tuple) -> None:
-  """Move the hand's forearm to `mount` = (pos, xyaxes), e.g. PALM_UP."""
-  pos, xyaxes = mount
-  forearm = spec.body("forearm")
-  forearm.pos = list(pos)
-  forearm.alt.type = mujoco.mjtOrientation.mjORIENTATION_XYAXES
-  forearm.alt.xyaxes = list(xyaxes)
+def load_spec(scene: str | pathlib.Path, hand: str | hands.Hand = hands.DEFAULT,
+              mount=hands.PALM_DOWN) -> mujoco.MjSpec:
+  """The editable spec of a scene, for tasks that set parameters before compiling: the arena,
+  `hand` placed by `mount` (hands.PALM_DOWN or hands.PALM_UP) and the object of `scene` (an
+  object of xml/objects/ by name, a path to an object MJCF file, or "hand": none)."""
+  hand = hands.load(hand)
+  spec = mujoco.MjSpec.from_file(str(assets.xml_path("arena.xml")))
+  spec.modelname = scene.stem if isinstance(scene, pathlib.Path) else scene
+  pos, quat = hands.placement(hand, mount)
+  spec.attach(_touching_objects_only(hands.read(hand)),
+              frame=spec.worldbody.add_frame(pos=pos, quat=quat), prefix=hands.PREFIX)
+  if scene != "hand":
+    _attach_unprefixed(spec, _object(scene))
+  return spec
+
+
+def _touching_objects_only(hand: mujoco.MjSpec) -> mujoco.MjSpec:
+  """The hand's colliding geoms get contype 1 / conaffinity 0, as ours have: the hand touches
+  the objects (conaffinity 1), never itself or the floor. A hand file of one's own may collide
+  otherwise; self-contact would cost MJX dearly and no task needs it."""
+  for geom in hand.geoms:
+    if geom.contype or geom.conaffinity:
+      geom.contype, geom.conaffinity = 1, 0
+  return hand

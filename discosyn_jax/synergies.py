@@ -280,14 +280,21 @@ def method_name(meta) -> str:
   """The paper's name of a synergy model: 'PCA4', 'AE6', 'DiscoSyn3-L', 'DiscoSyn4-NL', and
   'Random3-L' for the control (a decoder frozen at its random initialisation), and
   'DiscoSyn3-L-wd3' for a decoder learned with weight decay 3 (issue 26's tie-breaker),
-  'DiscoSyn3-L-wd8a200' for one whose decay falls to nothing over 200 train steps.
+  'DiscoSyn3-L-wd8a200' for one whose decay falls to nothing over 200 train steps;
+  'DiscoSyn3-L-prior' for one started from the physics prior, 'Prior3-L' for that start
+  frozen.
   `meta` is a synergy file's meta, or anything with the ARCHITECTURE fields (a config)."""
   get = meta.get if isinstance(meta, dict) else lambda k, d=None: getattr(meta, k, d)
   if get("method"):
     return f"{get('method')}{get('n_synergies')}"
-  # a config whose decoder is frozen at its own random initialisation: DiscoSyn's control
-  kind = "Random" if get("freeze_decoder") and not get("decoder_from") else "DiscoSyn"
+  # a config whose decoder is frozen at its own start: DiscoSyn's controls, Random or Prior
+  prior = get("decoder_init", "random") == "physics"
+  kind = "DiscoSyn"
+  if get("freeze_decoder") and not get("decoder_from"):
+    kind = "Prior" if prior else "Random"
   name = f"{kind}{get('n_synergies')}-{'L' if get('decoder') == 'linear' else 'NL'}"
+  if prior and kind == "DiscoSyn":
+    name += "-prior"
   decay = 0 if get("freeze_decoder") else get("decoder_weight_decay")  # frozen: never applied
   if not decay:
     return name
@@ -302,5 +309,5 @@ def frozen_fields(meta: dict[str, Any], path) -> dict[str, Any]:
   (no noise outside the space); a DiscoSyn decoder keeps the noise it learned."""
   return dict(architecture(meta), decoder_from=str(pathlib.Path(path).resolve()),
               freeze_decoder=True, decoder_noise="method" not in meta, alpha2=0.0, alpha3=0.0,
-              decoder_weight_decay=0.0, decoder_weight_decay_steps=0)
+              decoder_weight_decay=0.0, decoder_weight_decay_steps=0, decoder_init="random")
 

@@ -2,11 +2,11 @@
 
 - postures.png: the hand at z = -k, 0, +k along each synergy dimension, the others at 0
   (the paper's Fig. 1a). The action is the decoder's mean D(z), clipped to [-1, 1] as the
-  env does, held as the position targets of the hand alone (xml/scenes/hand.xml: no object,
+  env does, held as the position targets of the hand alone (the scene "hand": no object,
   so the picture shows what the decoder asks for, the same for every task) and simulated
   until the joints stop moving.
-- matrix.png (linear decoders): the b x 20 matrix W of a = W z + c as a heat map, one
-  column per actuator, named as in the model.
+- matrix.png (linear decoders): the b x actions matrix W of a = W z + c as a heat map, one
+  column per actuator, named as in the hand's file. Both on the run's own hand.
 """
 
 from __future__ import annotations
@@ -21,23 +21,19 @@ import matplotlib.pyplot as plt  # noqa: E402
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
-from discosyn_jax import render, scene  # noqa: E402
+from discosyn_jax import hands, render, scene  # noqa: E402
 from discosyn_jax.networks import DiscoSyn  # noqa: E402
 
 POSTURES_FILE = "postures.png"
 MATRIX_FILE = "matrix.png"
 
 
-def hand_model() -> mujoco.MjModel:
-  return scene.load_spec("hand").compile()
-
-
-def actuator_names(model: mujoco.MjModel) -> list[str]:
-  return [model.actuator(i).name for i in range(model.nu)]
+def hand_model(hand: str = hands.DEFAULT) -> mujoco.MjModel:
+  return scene.load_spec("hand", hand).compile()
 
 
 def decoded_actions(trainer, params, k: float) -> np.ndarray:
-  """(b, 3, 20) decoder means at z = -k e_i, 0, +k e_i, clipped to the action box."""
+  """(b, 3, actions) decoder means at z = -k e_i, 0, +k e_i, clipped to the action box."""
   b = trainer.model.n_synergies
   z = np.einsum("c,ij->icj", np.array([-k, 0.0, k]), np.eye(b)).reshape(3 * b, b)
   mean, _ = trainer.model.apply(params, z.astype(np.float32), method=DiscoSyn.decode)
@@ -46,7 +42,7 @@ def decoded_actions(trainer, params, k: float) -> np.ndarray:
 
 def settle(model: mujoco.MjModel, action: np.ndarray, max_steps: int = 2000,
            tol: float = 1e-3) -> mujoco.MjData:
-  """The hand holding `action` (in [-1, 1]^20, mapped to the actuators' ranges as the env
+  """The hand holding `action` (in [-1, 1] per actuator, mapped to the actuators' ranges as the env
   maps it) after the joints have stopped moving (|qvel| < tol) or `max_steps` steps."""
   data = mujoco.MjData(model)
   lo, hi = model.actuator_ctrlrange.T
@@ -59,9 +55,10 @@ def settle(model: mujoco.MjModel, action: np.ndarray, max_steps: int = 2000,
   return data
 
 
-def posture_images(actions: np.ndarray, height: int, width: int) -> np.ndarray:
-  """(b, 3, height, width, 3) front views of the settled hand for `decoded_actions`."""
-  model = hand_model()
+def posture_images(actions: np.ndarray, height: int, width: int,
+                   hand: str = hands.DEFAULT) -> np.ndarray:
+  """(b, 3, height, width, 3) front views of the settled `hand` for `decoded_actions`."""
+  model = hand_model(hand)
   flat = actions.reshape(-1, actions.shape[-1])
   images = render.many_frames(model, (settle(model, a) for a in flat), ("front",), height, width)
   return np.stack(list(images)).reshape(actions.shape[:2] + (height, width, 3))
@@ -85,7 +82,7 @@ def plot_postures(images: np.ndarray, k: float, path: pathlib.Path, title: str) 
 
 
 def plot_matrix(kernel: np.ndarray, actuators: list[str], path: pathlib.Path, title: str) -> None:
-  """Heat map of the (b, 20) synergy matrix, symmetric colours around 0."""
+  """Heat map of the (b, actions) synergy matrix, symmetric colours around 0."""
   b = kernel.shape[0]
   vmax = float(np.abs(kernel).max()) or 1.0
   fig, ax = plt.subplots(figsize=(9, 1.2 + 0.45 * b))
@@ -112,9 +109,10 @@ def write(trainer, params, out_dir: pathlib.Path, *, k: float = 1.0, force: bool
   paths = [out_dir / POSTURES_FILE] + ([out_dir / MATRIX_FILE] if decoder == "linear" else [])
   render.check_new(paths, force)
   out_dir.mkdir(parents=True, exist_ok=True)
-  images = posture_images(decoded_actions(trainer, params, k), height, width)
+  hand = trainer.config.hand
+  images = posture_images(decoded_actions(trainer, params, k), height, width, hand)
   plot_postures(images, k, paths[0], f"{title} {decoder} decoder: hand at z = -k, 0, +k".strip())
   if decoder == "linear":
     kernel = np.asarray(params["params"]["synergy_decoder"]["synergies"]["kernel"])
-    plot_matrix(kernel, actuator_names(hand_model()), paths[1], f"{title} synergy matrix W (a = W z + c)".strip())
+    plot_matrix(kernel, hands.actuator_names(hand_model(hand)), paths[1], f"{title} synergy matrix W (a = W z + c)".strip())
   return paths

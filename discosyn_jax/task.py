@@ -15,7 +15,7 @@ from typing import Any
 import jax
 import mujoco
 
-from discosyn_jax import checks, scene
+from discosyn_jax import checks, hands, scene
 from discosyn_jax.config import CONTROL_DT
 from discosyn_jax.physics import PhysicsView
 
@@ -58,15 +58,17 @@ class TaskConfig:
 
 
 class Task(abc.ABC):
-  scene: str | pathlib.Path  # xml/scenes/<scene>.xml, or a task's own object MJCF file
+  scene: str | pathlib.Path  # an object of xml/objects/ by name, or a task's own object MJCF file
+  mount = hands.PALM_DOWN  # or hands.PALM_UP, for objects that rest on the palm
   config_class: type = TaskConfig  # a task of one's own: its config (tasks.load)
   summary: str = ""  # one line for `discosyn tasks`
 
   def __init__(self, config: TaskConfig):
     self.config = config
 
-  def build_model(self) -> mujoco.MjModel:
-    spec = scene.load_spec(self.scene)
+  def build_model(self, hand: str | hands.Hand = hands.DEFAULT) -> mujoco.MjModel:
+    """The task's scene with `hand` (hands.load), compiled."""
+    spec = scene.load_spec(self.scene, hand, self.mount)
     option, config = spec.option, self.config
     option.timestep, option.iterations = config.timestep, config.solver_iterations
     option.ls_iterations, option.cone = config.ls_iterations, _CONES[config.cone]

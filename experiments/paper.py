@@ -43,7 +43,7 @@ import jax
 import numpy as np
 
 import tasks
-from discosyn_jax import evaluation, layout, loop, run_folder, synergies
+from discosyn_jax import evaluation, hands, layout, loop, run_folder, synergies
 from discosyn_jax.config import TrainConfig
 from experiments import presets, report_runs
 
@@ -191,20 +191,23 @@ def _meta(experiment, method, task_set, seed, scale):
 class Planner:
   """The steps of each experiment at one scale and seed, folders named in OUT."""
 
-  def __init__(self, out: pathlib.Path, scale: str, seed: int, task_sets=None, decoder_from=None):
+  def __init__(self, out: pathlib.Path, scale: str, seed: int, task_sets=None, decoder_from=None,
+               hand: str = hands.DEFAULT):
     if scale not in SCALES:
       raise ValueError(f"unknown scale {scale!r}; scales: {', '.join(SCALES)}")
-    self.out, self.scale, self.seed = pathlib.Path(out), scale, seed
+    self.out, self.scale, self.seed, self.hand = pathlib.Path(out), scale, seed, hand
+    # folders end in seed<n>, or <hand>-seed<n> on another hand than ours
+    self.tag = (f"{hands.label(hand)}-" if hand != hands.DEFAULT else "") + f"seed{seed}"
     self.sets = {**TASK_SETS, **(task_sets or {})}
     self.sizes = SCALES[scale]
     self.decoder_from = decoder_from  # transfer / sparse: this decoder instead of their own run
 
   def _config(self, base: TrainConfig, tasks, **changes) -> TrainConfig:
-    return base.replace(tasks=tuple(tasks), seed=self.seed, **self.sizes.train,
+    return base.replace(tasks=tuple(tasks), seed=self.seed, hand=self.hand, **self.sizes.train,
                         **changes).validate()
 
   def _folder(self, method: str, task_set: str) -> str:
-    return f"{method.lower()}-{task_set}-seed{self.seed}"
+    return f"{method.lower()}-{task_set}-{self.tag}"
 
   def discosyn(self, task_set: str, b: int, kind: str, variant: str = "") -> Train:
     config = self._config(presets.preset(f"{task_set}-disco{b}-{kind}{variant}"), self.sets[task_set])
@@ -217,10 +220,10 @@ class Planner:
     decoder frozen at its random initialisation (the decoder the DiscoSyn run of this seed
     starts from, whatever the tasks)."""
     config = learned.config.replace(freeze_decoder=True, decoder_from="", decoder_weight_decay=0.0,
-                                    decoder_weight_decay_steps=0).validate()
+                                    decoder_weight_decay_steps=0, decoder_init="random").validate()
     method = synergies.method_name(config)
     label = task_set.removeprefix("unseen-")
-    name = (f"{experiment}-random-seed{self.seed}" if label == experiment
+    name = (f"{experiment}-random-{self.tag}" if label == experiment
             else self._folder(method, task_set))
     return Train(name, config, _meta(experiment, method, task_set, self.seed, self.scale))
 
@@ -234,6 +237,10 @@ class Planner:
       method = f"{random.meta['method']}-zfree"
       steps.append(Train(self._folder(method, task_set),
                          random.config.replace(squash_z=False).validate(), meta(method)))
+    if learned.config.decoder_init == "physics":  # the prior's start frozen: what learning adds
+      prior = random.config.replace(decoder_init="physics").validate()
+      method = synergies.method_name(prior)
+      steps.append(Train(self._folder(method, task_set), prior, meta(method)))
     if learned.config.decoder == "linear":
       # named after the learned run it copies: Random3-L-matched, Random3-L-matched-wd8a200
       update = learned.meta["method"].removeprefix(f"DiscoSyn{learned.config.n_synergies}-L")
@@ -280,7 +287,7 @@ class Planner:
     method = synergies.method_name(meta)
     # folders: transfer-synergies-set1-seed0 (unseen tasks of set #1), sparse-synergies-seed0
     label = task_set.removeprefix("unseen-")
-    folder = lambda what: (f"{experiment}-{what}-seed{self.seed}" if label == experiment
+    folder = lambda what: (f"{experiment}-{what}-{self.tag}" if label == experiment
                            else self._folder(f"{experiment}-{what}", label))
     frozen = Train(folder("synergies"),
                    self._config(base, self.sets[task_set], **synergies.frozen_fields(meta, path)),
@@ -308,8 +315,11 @@ class Planner:
     if experiment.startswith("discosyn-") and experiment[9:] in DISCOSYN_SIZES:
       task_set = experiment[9:]
       # the decayed variant where it is measured to work (docs/TRAINING_NOTES.md, issue 26)
+      # on the hand's sets the linear preset starts from the physics prior, and the paper's
+      # random start runs beside it; the decayed variant where it was measured to work
       kinds = (("linear", ""), ("mlp", "")) + (
-          (("linear", presets.DECAYED),) if task_set in presets.DECAYED_SETS else ())
+          (("linear", presets.DECAYED),) if task_set in presets.DECAYED_SETS else
+          (("linear", presets.PAPER),))
       runs = [self.discosyn(task_set, b, kind, variant) for b in DISCOSYN_SIZES[task_set]
               for kind, variant in kinds]
       steps = [step for run in runs for step in (run, *self.controls(run, task_set, experiment))]
@@ -345,8 +355,10 @@ def select(steps: list, methods) -> list:
 
 def run(experiment: str, out: pathlib.Path, scale: str, seeds=None, *,
         make_trainer: Callable[[TrainConfig], Any] | None = None, task_sets=None,
-        decoder_from=None, methods=None, progress: bool = False, log=print) -> list[pathlib.Path]:
-  """Run (or continue) one experiment for every seed; the folders of its steps.
+        decoder_from=None, methods=None, hand: str = hands.DEFAULT, progress: bool = False,
+        log=print) -> list[pathlib.Path]:
+  """Run (or continue) one experiment for every seed on `hand` (a shipped hand or an MJCF
+  file, hands.load); the folders of its steps.
 
   `decoder_from` (a run folder or a synergy file) gives transfer and sparse a decoder
   trained elsewhere instead of their own DiscoSyn run. `methods`: only these methods' steps
@@ -358,7 +370,8 @@ def run(experiment: str, out: pathlib.Path, scale: str, seeds=None, *,
   out = pathlib.Path(out)
   if seeds is None:
     seeds = SCALES[scale].seeds if scale in SCALES else (0,)
-  plans = [Planner(out, scale, seed, task_sets, decoder_from).plan(experiment) for seed in seeds]
+  hand = hands.load(hand).name  # a file's absolute path
+  plans = [Planner(out, scale, seed, task_sets, decoder_from, hand).plan(experiment) for seed in seeds]
   if methods:
     known = {s.meta["method"] for s in plans[0]} - {"fit"}
     unknown = [m for m in methods if m not in known]

@@ -79,9 +79,9 @@ def final_success(metrics_success, done, episode_length):
 
 
 def object_qpos(env) -> np.ndarray:
-  from discosyn_jax import hand
+  from discosyn_jax import hands
 
-  return np.setdiff1d(np.arange(env.mj_model.nq), hand.qpos_indices(env.mj_model))
+  return np.setdiff1d(np.arange(env.mj_model.nq), hands.qpos_indices(env.mj_model))
 
 
 def fidelity(env, name: str, episodes: int, long_episodes: int, long_steps: int, seed: int):
@@ -90,12 +90,12 @@ def fidelity(env, name: str, episodes: int, long_episodes: int, long_steps: int,
   import jax
   import jax.numpy as jnp
 
-  from discosyn_jax import hand, scripted
+  from discosyn_jax import hands, scripted
   from discosyn_jax.physics.native import deepest_penetration
   from discosyn_jax.rollouts import run_episode
 
   keys = jax.random.split(jax.random.PRNGKey(seed), episodes)
-  script = jnp.asarray(scripted.for_task(name, env.episode_length, env.dt))
+  script = jnp.asarray(scripted.for_task(name, env.episode_length, env.dt, env.hand.name))
   _, states = run_episode(env, keys, lambda t, k, n: jnp.broadcast_to(script[t], (n, script.shape[1])))
   done = np.asarray(states.done)
   scripted_rate = final_success(np.asarray(states.metrics["success"]), done, env.episode_length).mean()
@@ -111,7 +111,7 @@ def fidelity(env, name: str, episodes: int, long_episodes: int, long_steps: int,
   long_keys = jax.random.split(jax.random.PRNGKey(seed + 1), long_episodes)
   _, states = run_episode(env, long_keys, uniform, steps=long_steps)
   diverged = int(np.asarray(states.metrics["diverged"]).max(0).sum())
-  qvel = np.asarray(states.pipeline_state.qvel)[..., hand.qvel_indices(env.mj_model)]
+  qvel = np.asarray(states.pipeline_state.qvel)[..., hands.qvel_indices(env.mj_model)]
   speed = float(np.nanmax(np.abs(qvel)))
   pen = deepest_penetration(env.mj_model, np.asarray(states.pipeline_state.raw), stride=11)
   return scripted_rate, random_rate, final_obj, diverged, pen, speed

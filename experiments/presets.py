@@ -3,6 +3,9 @@
 Each preset is a TrainConfig (discosyn_jax/config.py), so a typo in a field name fails at
 import, not in the middle of a run. The paper's runs (Tables I and II) are here by name,
 `<set>-disco<b>-<linear|mlp>` and `<set>-ppo`; experiments/paper.py runs them at a scale.
+The linear DiscoSyn presets of the hand's sets start every seed's decoder from the physics
+prior (issue 26: one synergy space from every seed, and more success than the strongest
+random control); `<set>-disco<b>-linear-paper` is the paper's update from a random decoder.
 """
 
 from __future__ import annotations
@@ -24,6 +27,11 @@ DECAYED = "-decay"
 # (set #1) it shrank the decoder until the valves failed (success 0.06-0.16), so there it is
 # a preset to try, not a row of the tables
 DECAYED_SETS = ("planted", "planted_slack")
+# issue 26's tie-breaker that works on the hand: every seed's decoder starts in the subspace
+# of the actions that move the objects most (discosyn_jax/physics_prior.py), the default of
+# the linear DiscoSyn presets on the hand; `<preset>-paper`: the paper's random start
+PRIOR = dict(decoder_init="physics")
+PAPER = "-paper"
 # full-action PPO: no discriminator, no decoder noise, a smaller initial std on 20 dims
 PPO = dict(decoder="identity", n_synergies=20, alpha2=0.0, alpha3=0.0, init_z_std=0.5)
 
@@ -32,7 +40,7 @@ PRESETS: dict[str, TrainConfig] = {
     # valves, 2-3 minutes on 2 idle cores (819 k env steps), long enough to turn them
     # (docs/TRAINING_NOTES.md, "quickstart": 3 seeds)
     "quickstart": TrainConfig(tasks=("valve2", "valve3"), n_synergies=3, decoder="linear",
-                              squash_z=True, num_envs=128, unroll_length=20, num_minibatches=8,
+                              squash_z=True, **PRIOR, num_envs=128, unroll_length=20, num_minibatches=8,
                               update_epochs=4, steps=160, eval_every=20, eval_envs=32,
                               checkpoint_every=80),
     # independent full-action PPO on one valve (the paper's first baseline stage)
@@ -49,7 +57,10 @@ for _set, _sizes in (("set1", (3, 4)), ("set2", (4, 6))):
       # random decoder did as well (issue 13, docs/TRAINING_NOTES.md)
       PRESETS[f"{_set}-disco{_b}-{_kind}"] = TrainConfig(tasks=_tasks, n_synergies=_b,
                                                         decoder=_kind, squash_z=True, **CPU_RUN)
-    PRESETS[f"{_set}-disco{_b}-linear{DECAYED}"] = PRESETS[f"{_set}-disco{_b}-linear"].replace(**DECAY)
+    _paper = PRESETS[f"{_set}-disco{_b}-linear"]
+    PRESETS[f"{_set}-disco{_b}-linear{PAPER}"] = _paper
+    PRESETS[f"{_set}-disco{_b}-linear{DECAYED}"] = _paper.replace(**DECAY)
+    PRESETS[f"{_set}-disco{_b}-linear"] = _paper.replace(**PRIOR)
 
 # DiscoSyn3 on the planted test bed: (a) one adequate subspace, (b) many (issue 26)
 for _set in ("planted", "planted_slack"):

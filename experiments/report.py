@@ -162,14 +162,15 @@ def discovery_table(runs: list[Run]) -> str:
       group = sorted((r for r in decoders if r.task_set == task_set and r.method == method),
                      key=lambda r: r.seed)
       learned = [b for b in map(discovery.learned_basis, (r.path for r in group)) if b is not None]
-      initial = [b for b in map(discovery.initial_basis, (r.config for r in group)) if b is not None]
+      n = group[0].action_size
+      initial = [b for b in (discovery.initial_basis(r.config, n) for r in group) if b is not None]
       ends = [_last_logged(r) for r in group]
       start = [e["decoder/overlap_start"] for e in ends if "decoder/overlap_start" in e]
       planted = [e["decoder/overlap_planted"] for e in ends if "decoder/overlap_planted" in e]
       b = group[0].config.n_synergies
       lines.append(f"| {method} | {task_set} | {_spread(discovery.cross_seed(learned))} | "
                    f"{_spread(discovery.cross_seed(initial))} | {_spread(start)} | "
-                   f"{_spread(planted)} | {diagnostics.chance_overlap(b, b):.2f} |")
+                   f"{_spread(planted)} | {diagnostics.chance_overlap(b, b, n):.2f} |")
   return "\n".join(lines) + "\n" if len(lines) > 2 else ""
 
 

@@ -86,7 +86,7 @@ def overlap_curves(runs: list[Run], path: pathlib.Path, title: str) -> pathlib.P
         _band(ax, method, [[(r.per_task_env_steps(row), row[key]) for row in rows[r.path]
                             if key in row] for r in group])
     b = runs[0].config.n_synergies
-    ax.axhline(diagnostics.chance_overlap(b, b), color="gray", ls=":", label="chance")
+    ax.axhline(diagnostics.chance_overlap(b, b, runs[0].action_size), color="gray", ls=":", label="chance")
     ax.set_title(f"overlap {titles[key]}")
     ax.set_xlabel("env steps of the task")
     ax.set_ylabel("overlap")

@@ -4,12 +4,13 @@ task set and seed (from its experiment.json, else from its config) and its evalu
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import pathlib
 from typing import Any
 
 from discosyn_jax import config as config_lib
-from discosyn_jax import layout, logs
+from discosyn_jax import hands, layout, logs
 from discosyn_jax.config import TrainConfig
 from experiments.presets import DECAY
 from tasks import TASK_SETS
@@ -48,6 +49,22 @@ class Run:
   def per_task_env_steps(self, row) -> int:
     return row["step"] * self.config.num_envs * self.config.unroll_length
 
+  @property
+  def action_size(self) -> int:
+    return action_size(self.config.tasks[0], self.config.hand)
+
+
+@functools.cache
+def action_size(task: str, hand: str) -> int:
+  """The action size of `task` on `hand`: the hand's actuators, or a pure-JAX task's own
+  (its env built once). A task no longer known (a file gone) counts as a hand's."""
+  import tasks.registry as registry
+
+  entry = registry.REGISTRY.get(task)
+  if entry is not None and entry.env is not registry.HandEnv:
+    return registry.make(task, hand=hand).action_size
+  return len(hands.actuators(hand))
+
 
 def _method_of(config: TrainConfig) -> str:
   from discosyn_jax import synergies
@@ -82,9 +99,12 @@ def load_run(path: pathlib.Path) -> Run:
   # logs kept without checkpoints (docs/results) are finished when the last step was evaluated
   finished = (path / layout.FINAL).is_dir() or bool(evals and evals[-1]["step"] >= config.steps)
   # derived from the config only where experiment.json is silent (_method_of may read a file)
+  task_set = meta["set"] if "set" in meta else _set_of(config)
+  if config.hand != hands.DEFAULT:  # another hand's runs are never pooled with ours
+    task_set = f"{task_set} on {hands.label(config.hand)}"
   return Run(path=path, config=config, experiment=meta.get("experiment", "train"),
              method=meta["method"] if "method" in meta else _method_of(config),
-             task_set=meta["set"] if "set" in meta else _set_of(config),
+             task_set=task_set,
              seed=meta.get("seed", config.seed), evals=evals, finished=finished,
              scale=meta.get("scale"))
 

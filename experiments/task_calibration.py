@@ -8,6 +8,7 @@ object speed and the deepest hand-object contact penetration.
 
   python experiments/task_calibration.py --episodes 128
   python experiments/task_calibration.py --tasks weight_pull --episodes 64 --policies scripted
+  python experiments/task_calibration.py --tasks valve3 --hand leap16   # another hand
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 
 import tasks
-from discosyn_jax import hand, scripted
+from discosyn_jax import hands, scripted
 from discosyn_jax.physics.native import deepest_penetration
 from discosyn_jax.rollouts import run_episode
 from experiments import physics_study
@@ -62,7 +63,7 @@ def report(label, env, info, pstate, success, done):
   ended = done.max(0) > 0
   # an episode that ended early is judged by its state when it ended
   final_success = physics_study.final_success(success, done, env.episode_length)
-  hand_v = hand.qvel_indices(env.mj_model)
+  hand_v = hands.qvel_indices(env.mj_model)
   obj_v = [i for i in range(env.mj_model.nv) if i not in set(hand_v)]
   measure, best = progress(env, pstate.qpos, info)
   print(f"{label:34s} success last {final_success.mean():6.1%} any {success.max(0).mean():6.1%}  "
@@ -78,19 +79,20 @@ def main():
   parser.add_argument("--policies", nargs="+", default=["random", "scripted"], choices=["random", "scripted"])
   parser.add_argument("--episodes", type=int, default=128)
   parser.add_argument("--seed", type=int, default=0)
+  parser.add_argument("--hand", default=hands.DEFAULT, help="a shipped hand (scripted motions: ours)")
   args = parser.parse_args()
 
-  def uniform(t, key, n):
-    return jax.random.uniform(key, (n, 20), minval=-1.0, maxval=1.0)
-
   for name in args.tasks:
-    env = tasks.make(name, backend="native")
+    env = tasks.make(name, backend="native", hand=args.hand)
+    uniform = lambda t, key, n, size=env.action_size: jax.random.uniform(
+        key, (n, size), minval=-1.0, maxval=1.0)
     if "random" in args.policies:
       report(f"{name} random", env, *rollout(env, uniform, args.episodes, args.seed))
     if "scripted" in args.policies:
-      script = jnp.asarray(scripted.for_task(name, env.episode_length, env.dt))
+      script = jnp.asarray(scripted.for_task(name, env.episode_length, env.dt, env.hand.name))
       report(f"{name} scripted", env,
-             *rollout(env, lambda t, k, n: jnp.broadcast_to(script[t], (n, 20)), args.episodes, args.seed))
+             *rollout(env, lambda t, k, n: jnp.broadcast_to(script[t], (n, script.shape[1])),
+                      args.episodes, args.seed))
 
 
 if __name__ == "__main__":

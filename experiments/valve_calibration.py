@@ -18,7 +18,7 @@ import jax.numpy as jnp
 import numpy as np
 
 import tasks
-from discosyn_jax import hand, scripted
+from discosyn_jax import hands, scripted
 from discosyn_jax.physics.native import deepest_penetration
 
 
@@ -40,7 +40,7 @@ def rollout(env, actions_fn, episodes: int, seed: int):
 
 
 def report(name, env, start, angles, qvels, raws, success):
-  hand_v = hand.qvel_indices(env.mj_model)
+  hand_v = hands.qvel_indices(env.mj_model)
   net = angles[:, -1] - start
   valve_speed = np.abs(np.diff(np.concatenate([start[:, None], angles], 1), axis=1)) / env.dt
   print(f"{name:44s} success {success.mean():6.1%}  mean|net| {np.abs(net).mean():5.2f} rad  "

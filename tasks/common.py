@@ -1,22 +1,25 @@
-"""Pieces every task module uses: the hand's joint addresses, its noisy start pose, angles."""
+"""Pieces every task module uses: the hand's joint addresses (any hand: hands.py), its noisy
+start pose, angles."""
 
 from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
 import mujoco
+import numpy as np
 
-from discosyn_jax import hand
+from discosyn_jax import hands
 
 
 class HandJoints:
   """The hand's qpos addresses and ranges in one compiled model (looked up on the host)."""
 
   def __init__(self, model: mujoco.MjModel):
-    self.qpos = jnp.asarray(hand.qpos_indices(model))
-    ids = [model.joint(j).id for j in hand.JOINTS]
-    self.lo = jnp.asarray(model.jnt_range[ids, 0], jnp.float32)
-    self.hi = jnp.asarray(model.jnt_range[ids, 1], jnp.float32)
+    ids = hands.joint_ids(model)
+    self.qpos = jnp.asarray(hands.qpos_indices(model))
+    limited = model.jnt_limited[ids].astype(bool)  # a hand of one's own may leave joints unlimited
+    self.lo = jnp.asarray(np.where(limited, model.jnt_range[ids, 0], -np.inf), jnp.float32)
+    self.hi = jnp.asarray(np.where(limited, model.jnt_range[ids, 1], np.inf), jnp.float32)
     self.qpos0 = jnp.asarray(model.qpos0, jnp.float32)  # the whole model's reference pose
     self.nv = model.nv
 

@@ -1,6 +1,6 @@
 """Reorient a dice on the upturned palm to a goal orientation (task set #2).
 
-The hand is mounted palm up (scene.PALM_UP); a free 0.05 m, 71 g cube starts resting on the
+The hand is mounted palm up (hands.PALM_UP); a free 0.05 m, 71 g cube starts resting on the
 palm, unrotated. The goal is its start orientation turned by a random angle, |angle| in
 [`goal_min_angle`, `goal_max_angle`], about the palm normal (`goal_axis="z"`, Gym's
 HandManipulateBlockRotateZ: `dice`) or about a random axis (`goal_axis="any"`, the full
@@ -35,12 +35,12 @@ import jax
 import jax.numpy as jnp
 import mujoco
 
-from discosyn_jax import scene
+from discosyn_jax import hands
 from discosyn_jax.physics import PhysicsView
 from discosyn_jax.task import Info, Task, TaskConfig
 from tasks import common
 
-PALM_SURFACE_Z = 0.2361  # world height of the upturned palm's surface (scene.PALM_UP)
+PALM_SURFACE_Z = 0.2361  # world height of the upturned palm's surface (hands.PALM_UP)
 GOAL_AXES = ("z", "any")  # the palm normal (world z, the hand palm up), or a random axis
 
 
@@ -79,6 +79,7 @@ def rotation_angle(a: jax.Array, b: jax.Array) -> jax.Array:
 
 class Dice(Task):
   scene = "dice"
+  mount = hands.PALM_UP
 
   def __init__(self, config: DiceConfig):
     super().__init__(config)
@@ -89,9 +90,6 @@ class Dice(Task):
                    f"{config.goal_min_angle}, {config.goal_max_angle}")
     common.require(config.success_angle > 0, f"success_angle must be > 0, not {config.success_angle}")
     common.require(config.drop_height > 0, f"drop_height must be > 0, not {config.drop_height}")
-
-  def edit_spec(self, spec: mujoco.MjSpec) -> None:
-    scene.mount_hand(spec, scene.PALM_UP)
 
   def bind(self, model: mujoco.MjModel) -> None:
     self.hand = common.HandJoints(model)

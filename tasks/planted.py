@@ -77,11 +77,11 @@ def task_plane(config: PlantedConfig) -> np.ndarray:
 
 
 class PlantedEnv(Env):
-  """One planted task with Brax's Env interface (module docstring); `backend` is accepted
-  and ignored, there is no physics."""
+  """One planted task with Brax's Env interface (module docstring); `backend` and `hand` are
+  accepted and ignored: there is no physics and no hand."""
 
-  def __init__(self, config: PlantedConfig, backend: str = "auto"):
-    del backend
+  def __init__(self, config: PlantedConfig, backend: str = "auto", hand: str = ""):
+    del backend, hand
     self.config = config
     self.episode_length = config.episode_length
     self.planted_span = span(config.rank, config.span_seed)  # what the decoder should find

@@ -16,6 +16,7 @@ discosyn_jax.setup_jax()  # before brax (env.py) imports MJX
 
 from brax.envs.base import Env  # noqa: E402
 
+from discosyn_jax import hands  # noqa: E402
 from discosyn_jax.config import PHYSICS  # noqa: E402
 from discosyn_jax.env import HandEnv  # noqa: E402
 from discosyn_jax.task import Task, TaskConfig  # noqa: E402
@@ -177,9 +178,11 @@ def physics_overrides(name: str, physics: str) -> dict:
   return dict(FAST.get(name, {})) if physics == "fast" else {}
 
 
-def make(name: str, *, backend: str = "auto", physics: str = "fast", **overrides) -> Env:
+def make(name: str, *, backend: str = "auto", physics: str = "fast", hand: str = hands.DEFAULT,
+         **overrides) -> Env:
   """The environment of task `name` on `backend` ("auto", "native" or "mjx"; a pure-JAX
-  task has none and ignores it), with the physics profile `physics` (config.PHYSICS).
+  task has none and ignores it, as it ignores `hand`), with the physics profile `physics`
+  (config.PHYSICS) and `hand` (discosyn_jax.hands.load: a shipped hand or an MJCF file).
 
   `overrides` replace fields of the task's default config (e.g. frictionloss=0.2).
   """
@@ -188,7 +191,7 @@ def make(name: str, *, backend: str = "auto", physics: str = "fast", **overrides
     task = entry(name).task(config)
   except ValueError as err:
     raise ValueError(f"task {name!r}: {err}") from None
-  return entry(name).env(task, backend=backend)
+  return entry(name).env(task, backend=backend, hand=hand)
 
 
 def expand(names) -> list[str]:
@@ -212,8 +215,9 @@ def sets_of(name: str) -> list[str]:
 
 
 def make_envs(config) -> list[Env]:
-  """The envs of a TrainConfig's tasks, on its backend and physics."""
-  return [make(name, backend=config.backend, physics=config.physics) for name in config.tasks]
+  """The envs of a TrainConfig's tasks, on its backend, physics and hand."""
+  return [make(name, backend=config.backend, physics=config.physics, hand=config.hand)
+          for name in config.tasks]
 
 
 def trainer(config, **kwargs):

@@ -112,3 +112,14 @@ def valve3_on_both_backends():
 
     out[backend] = (env, jax.jit(roll)(jax.random.PRNGKey(3)))
   return out
+
+
+@pytest.fixture(autouse=True)
+def _a_cheap_physics_prior(monkeypatch):
+  """Runs that start from the physics prior (the quickstart's default) make it from 4
+  states per task here instead of 640 (test_physics_prior.py tests the prior itself; a
+  training in a subprocess makes the whole one)."""
+  from discosyn_jax import physics_prior
+
+  monkeypatch.setattr(physics_prior, "ENVS", 2)
+  monkeypatch.setattr(physics_prior, "EVERY", 50)

@@ -36,10 +36,10 @@ def tensorboard_scalars(folder) -> dict[str, list[tuple[int, float]]]:
 
 
 @functools.cache
-def env(name: str, backend: str = "native"):
-  """One env per task and backend for the whole session (an MJX env traces its reset when
-  it is built). Tests that change a task's settings make their own."""
-  return tasks.make(name, backend=backend)
+def env(name: str, backend: str = "native", hand: str = "shadow20"):
+  """One env per task, backend and hand for the whole session (an MJX env traces its reset
+  when it is built). Tests that change a task's settings make their own."""
+  return tasks.make(name, backend=backend, hand=hand)
 
 
 def on_mjx(native_env, mjx_env, state):

@@ -9,7 +9,7 @@ import pytest
 
 import tasks
 
-from discosyn_jax import hand, physics
+from discosyn_jax import hands, physics
 from discosyn_jax.config import TrainConfig
 from tests import helpers
 
@@ -64,7 +64,7 @@ def test_native_and_mjx_trajectories_agree_on_valve3(valve3_on_both_backends):
     assert not np.asarray(states.done).any()
     trajectories[backend] = np.asarray(jax.vmap(env.physics.view)(states.pipeline_state).qpos)
   native, mjx = trajectories["native"], trajectories["mjx"]
-  hand_q = hand.qpos_indices(env.mj_model)
+  hand_q = hands.qpos_indices(env.mj_model)
   valve_q = env.task.valve_qpos
   assert native[-1, valve_q] - native[0, valve_q] > 0.2  # the fingers did turn it
   np.testing.assert_allclose(mjx[:, hand_q], native[:, hand_q], atol=0.02)

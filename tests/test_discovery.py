@@ -151,7 +151,7 @@ def test_the_initial_decoder_is_rebuilt_from_the_config_alone(decoder):
   from_trainer = make_trainer(config).initial_params()["params"]["synergy_decoder"]
   rebuilt = train.random_decoder(config, 20)
   jax.tree.map(np.testing.assert_array_equal, rebuilt, from_trainer)
-  basis = discovery.initial_basis(config)
+  basis = discovery.initial_basis(config, 20)
   expected = diagnostics.synergy_basis(make_trainer(config).model,
                                        make_trainer(config).initial_params())
   np.testing.assert_allclose(basis, expected, atol=1e-6)

@@ -97,7 +97,7 @@ def test_a_wheel_carries_the_xml_and_works_outside_the_checkout(tmp_path):
   (wheel,) = (tmp_path / "wheel").glob("*.whl")
   with zipfile.ZipFile(wheel) as zf:
     names = set(zf.namelist())
-    assert {"discosyn_jax/xml/hand.xml", "discosyn_jax/xml/scenes/valve3.xml",
+    assert {"discosyn_jax/xml/hands/shadow20.xml", "discosyn_jax/xml/hands/leap16.xml",
             "discosyn_jax/xml/objects/valve0.xml", "tasks/valve.py"} <= names
     zf.extractall(tmp_path / "site")
   code = ("import tasks, discosyn_jax.assets as a; env = tasks.make('valve3', backend='native');"

@@ -15,7 +15,7 @@ from discosyn_jax import checkpoints, logs, loop, networks, run_folder, synergie
 from experiments import report, report_runs
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.train import Trainer, _episode_metrics
-from experiments import paper
+from experiments import paper, presets
 from tests import reference
 from tests.toy_env import ReachAction
 
@@ -30,8 +30,19 @@ def make_trainer(config):
   return Trainer(config, envs=[ENVS[name]() for name in config.tasks])
 
 
+@pytest.fixture(scope="module", autouse=True)
+def paper_start():
+  """The toy envs have no physics: the plans here start from the paper's random decoder
+  (the physics prior, the presets' start on the hand, is tested in test_physics_prior.py)."""
+  with pytest.MonkeyPatch.context() as patch:
+    patch.setattr(presets, "PRESETS", {name: config.replace(decoder_init="random")
+                                       if config.decoder == "linear" else config
+                                       for name, config in presets.PRESETS.items()})
+    yield
+
+
 @pytest.fixture(scope="module")
-def experiments(tmp_path_factory):
+def experiments(paper_start, tmp_path_factory):
   out = tmp_path_factory.mktemp("experiments")
   for name in ("baselines-set1", "sparse"):
     paper.run(name, out, "ci", make_trainer=make_trainer, task_sets=SETS, log=lambda *a: None)

@@ -8,7 +8,7 @@ from PIL import Image
 import tasks
 
 from discosyn import cli
-from discosyn_jax import checkpoints, hand, layout, synergy_pictures, videos
+from discosyn_jax import checkpoints, hands, layout, synergy_pictures, videos
 from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.train import Trainer
@@ -49,8 +49,8 @@ def linear_run(tmp_path_factory):
 
 def test_settle_holds_the_commanded_posture_of_the_bare_hand():
   model = synergy_pictures.hand_model()
-  assert model.nq == len(hand.JOINTS)  # the hand alone: no object joints
-  assert synergy_pictures.actuator_names(model) == [f"A_{j}" for j in hand.ACTUATED]
+  assert model.nq == 24  # the hand alone: no object joints
+  assert hands.actuator_names(model) == hands.actuators("shadow20")
   action = np.random.default_rng(0).uniform(-0.8, 0.8, model.nu)
   data = synergy_pictures.settle(model, action)
   assert np.abs(data.qvel).max() < 1e-3

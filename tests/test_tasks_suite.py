@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import tasks
-from discosyn_jax import hand, scene, scripted
+from discosyn_jax import hands, scene, scripted
 from discosyn_jax.physics.native import _INTEGRATION
 from tasks import dice, weight_pull
 from tests import helpers
@@ -127,7 +127,7 @@ def test_native_and_mjx_agree(name):
     assert np.isfinite(np.asarray(states.obs)).all() and states.obs.shape == (steps, OBS_SIZE[name])
     out[env.backend] = np.asarray(jax.vmap(env.physics.view)(states.pipeline_state).qpos)
   native_q, mjx_q = out["native"], out["mjx"]
-  hand_q = hand.qpos_indices(native.mj_model)
+  hand_q = hands.qpos_indices(native.mj_model)
   np.testing.assert_allclose(mjx_q[:, hand_q], native_q[:, hand_q], atol=0.05)
   obj = OBJECT_QPOS.get(name, slice(24, 25))
   np.testing.assert_allclose(mjx_q[:, obj], native_q[:, obj], atol=atol)
@@ -294,7 +294,7 @@ def test_dice_rests_on_the_upturned_palm():
   env = helpers.env("dice")
   data = mujoco.MjData(env.mj_model)
   mujoco.mj_forward(env.mj_model, data)
-  palm = data.site("palm_center")
+  palm = data.site("hand/palm_center")
   assert palm.xpos[2] == pytest.approx(dice.PALM_SURFACE_Z, abs=1e-4)
   assert palm.xmat.reshape(3, 3)[:, 1] @ np.array([0, 0, 1.0]) == pytest.approx(-1.0)  # palm frame -y is up
   lo, hi = env.mj_model.actuator_ctrlrange.T
@@ -355,9 +355,7 @@ def test_bad_settings_are_refused(name, bad):
 
 
 def test_palm_up_mount_faces_the_palm_up():
-  spec = scene.load_spec("valve3")
-  scene.mount_hand(spec, scene.PALM_UP)
-  model = spec.compile()
+  model = scene.load_spec("valve3", mount=hands.PALM_UP).compile()
   data = mujoco.MjData(model)
   mujoco.mj_forward(model, data)
-  np.testing.assert_allclose(data.site("palm_center").xpos, [0.0, -0.05, dice.PALM_SURFACE_Z], atol=1e-4)
+  np.testing.assert_allclose(data.site("hand/palm_center").xpos, [0.0, -0.05, dice.PALM_SURFACE_Z], atol=1e-4)

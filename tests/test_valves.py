@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import tasks
-from discosyn_jax import hand, scripted
+from discosyn_jax import hands, scripted
 from discosyn_jax.physics.native import deepest_penetration
 from tests import helpers
 from tests.helpers import run_episode, uniform_policy
@@ -70,7 +70,7 @@ def test_random_policy_moves_like_a_hand_not_a_paddle(random_rollouts, name):
   """
   env, _, states = random_rollouts[name]
   qvel = np.asarray(states.pipeline_state.qvel)
-  assert np.abs(qvel[..., hand.qvel_indices(env.mj_model)]).max() < 20.0
+  assert np.abs(qvel[..., hands.qvel_indices(env.mj_model)]).max() < 20.0
   assert np.abs(qvel[..., env.task.valve_qvel]).max() < 6.0
   assert deepest_penetration(env.mj_model, states.pipeline_state.raw, stride=7) < 0.008
 
@@ -154,4 +154,4 @@ def test_long_random_rollouts_stay_finite():
   assert float(np.asarray(states.metrics["diverged"]).max()) == 0.0
   qvel = np.asarray(states.pipeline_state.qvel)
   assert np.isfinite(qvel).all() and np.isfinite(np.asarray(states.pipeline_state.qpos)).all()
-  assert np.abs(qvel[..., hand.qvel_indices(env.mj_model)]).max() < 20.0
+  assert np.abs(qvel[..., hands.qvel_indices(env.mj_model)]).max() < 20.0
