@@ -5,6 +5,7 @@ tasks, render-scenes, upgrade; its flags, and how it ends (one line and exit 2 f
 from __future__ import annotations
 
 import argparse
+import gc
 import os
 import signal
 import sys
@@ -178,25 +179,51 @@ class Terminated(KeyboardInterrupt):
   """SIGTERM (a scheduler ending the job): it stops a command as Ctrl-C does."""
 
 
-def _terminate(signum, frame):
-  raise Terminated()
+def _stopper(exception_type):
+  """A handler that stops the command at once, or, where the signal landed inside a
+  garbage-collector callback (which would print and drop the exception), at the training
+  loop's next step (discosyn_jax/stop.py)."""
+  def handler(signum, frame):
+    from discosyn_jax import stop
+
+    _quiet_end()  # the command ends: from here on, one line (main sets both back)
+    if stop.in_gc_callback(frame):
+      stop.defer(exception_type())
+      return
+    raise exception_type()
+
+  return handler
 
 
 def main(argv: list[str] | None = None) -> int:
   args = build_parser().parse_args(argv)
   # a handler only the main thread may set (a notebook may call main from another)
   main_thread = threading.current_thread() is threading.main_thread()
-  previous = signal.signal(signal.SIGTERM, _terminate) if main_thread else None
+  previous = {sig: signal.signal(sig, _stopper(kind))
+              for sig, kind in ((signal.SIGTERM, Terminated), (signal.SIGINT, KeyboardInterrupt))
+              } if main_thread else {}
+  collecting, unraisable = gc.isenabled(), sys.unraisablehook
   try:
     return _run(args)
   except KeyboardInterrupt as err:  # Ctrl-C or SIGTERM: one line (where a run resumes from)
     how, signum = ("SIGTERM", signal.SIGTERM) if isinstance(err, Terminated) else \
         ("Ctrl-C", signal.SIGINT)
+    _quiet_end()
     print(f"discosyn: stopped by {how}{': ' + str(err) if str(err) else ''}", file=sys.stderr)
     return 128 + signum
   finally:
-    if main_thread:  # (None: a handler set outside Python, which cannot be set back)
-      signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
+    sys.unraisablehook = unraisable
+    if collecting:
+      gc.enable()
+    for sig, handler in previous.items():  # (None: set outside Python, cannot be set back)
+      signal.signal(sig, signal.SIG_DFL if handler is None else handler)
+
+
+def _quiet_end() -> None:
+  """A stopped command's line is its only one: objects the garbage collector frees while it
+  ends (orbax's event loops, their pipes closed) printed "Exception ignored" tracebacks."""
+  gc.disable()
+  sys.unraisablehook = lambda unraisable: None
 
 
 def exit_with(code: int) -> None:
@@ -204,6 +231,7 @@ def exit_with(code: int) -> None:
   its files and said where it stopped; it ends at once, without the interpreter's shutdown,
   where orbax's idle writer threads printed "Event loop is closed" tracebacks after that line."""
   if code in (128 + signal.SIGINT, 128 + signal.SIGTERM):
+    _quiet_end()
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(code)

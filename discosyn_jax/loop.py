@@ -20,7 +20,7 @@ from typing import Any, Callable
 import jax
 
 from discosyn_jax import (checkpoints, checks, evaluation, layout, logs, physics_prior, plots,
-                          run_folder, runs, synergies)
+                          run_folder, runs, stop, synergies)
 from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.train import Trainer, TrainState, random_decoder
@@ -187,6 +187,7 @@ def _train(trainer: Trainer, run_dir: pathlib.Path, resume: bool, writer: runs.W
                   time.perf_counter() - start)
       tick = time.perf_counter()
       while int(state.step) < config.steps:
+        stop.check()  # a Ctrl-C or SIGTERM its handler could not raise where it landed
         state, metrics = train_step(state)
         if reference is not None:
           metrics.update(trainer.decoder_drift(reference, state.params))

@@ -3,9 +3,9 @@
 Each preset is a TrainConfig (discosyn_jax/config.py), so a typo in a field name fails at
 import, not in the middle of a run. The paper's runs (Tables I and II) are here by name,
 `<set>-disco<b>-<linear|mlp>` and `<set>-ppo`; experiments/paper.py runs them at a scale.
-The linear DiscoSyn presets of the hand's sets start every seed's decoder from the physics
-prior (issue 26: one synergy space from every seed, and more success than the strongest
-random control); `<set>-disco<b>-linear-paper` is the paper's update from a random decoder.
+On set #1 the linear DiscoSyn presets start every seed's decoder from the physics prior
+(issue 26: one synergy space from every seed, and more success than the strongest random
+control); `<set>-disco<b>-linear-prior` and `-paper` name either start on every set.
 """
 
 from __future__ import annotations
@@ -28,10 +28,13 @@ DECAYED = "-decay"
 # a preset to try, not a row of the tables
 DECAYED_SETS = ("planted", "planted_slack")
 # issue 26's tie-breaker that works on the hand: every seed's decoder starts in the subspace
-# of the actions that move the objects most (discosyn_jax/physics_prior.py), the default of
-# the linear DiscoSyn presets on the hand; `<preset>-paper`: the paper's random start
+# of the actions that move the objects most (discosyn_jax/physics_prior.py); `<preset>-prior`,
+# and `<preset>-paper` for the paper's random start
 PRIOR = dict(decoder_init="physics")
-PAPER = "-paper"
+PRIORED, PAPER = "-prior", "-paper"
+# where the prior is the start of the plain linear preset: set #1 (5 seeds: +0.20 over the
+# strongest control). On set #2 it lost the screw (0 % on 2 seeds; docs/TRAINING_NOTES.md)
+PRIOR_SETS = ("set1",)
 # full-action PPO: no discriminator, no decoder noise, a smaller initial std on 20 dims
 PPO = dict(decoder="identity", n_synergies=20, alpha2=0.0, alpha3=0.0, init_z_std=0.5)
 
@@ -59,8 +62,10 @@ for _set, _sizes in (("set1", (3, 4)), ("set2", (4, 6))):
                                                         decoder=_kind, squash_z=True, **CPU_RUN)
     _paper = PRESETS[f"{_set}-disco{_b}-linear"]
     PRESETS[f"{_set}-disco{_b}-linear{PAPER}"] = _paper
+    PRESETS[f"{_set}-disco{_b}-linear{PRIORED}"] = _paper.replace(**PRIOR)
     PRESETS[f"{_set}-disco{_b}-linear{DECAYED}"] = _paper.replace(**DECAY)
-    PRESETS[f"{_set}-disco{_b}-linear"] = _paper.replace(**PRIOR)
+    if _set in PRIOR_SETS:
+      PRESETS[f"{_set}-disco{_b}-linear"] = _paper.replace(**PRIOR)
 
 # DiscoSyn3 on the planted test bed: (a) one adequate subspace, (b) many (issue 26)
 for _set in ("planted", "planted_slack"):
