@@ -108,9 +108,7 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("--methods", nargs="+", metavar="METHOD",
                  help="only these methods' runs and the runs they need, e.g. DiscoSyn3-L "
                  "Random3-L, or PCA4 (with its PPO run and fit); default: every method")
-  p.add_argument("--hand", default="shadow20", help="every run on this hand: shadow20 | leap16 | "
-                 "path/to/hand.xml[:PALM_SITE]; folders end in <hand>-seed<n> on another than "
-                 "ours (default: %(default)s)")
+  add_hand_flag(p, "every run on this hand; folders end in <hand>-seed<n> on another than ours")
   p.add_argument("--progress", action="store_true", help="a progress bar per run")
   p.set_defaults(fn=commands.cmd_experiment)
 
@@ -140,8 +138,7 @@ def build_parser() -> argparse.ArgumentParser:
                  "%(default)s)")
   p.add_argument("--seed", type=int, default=0, help="seed of the initial states and actions "
                  "(default: %(default)s)")
-  p.add_argument("--hand", default="shadow20", help="shadow20 | leap16 | path/to/hand.xml"
-                 "[:PALM_SITE] (docs/YOUR_HAND.md; default: %(default)s)")
+  add_hand_flag(p)
   p.set_defaults(fn=commands.cmd_demo)
 
   p = sub.add_parser("tasks", help="list the tasks with observation size and set membership")
@@ -153,11 +150,18 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("--step", type=int, default=14, help="control steps of the task's scripted motion "
                  "before the picture (default: %(default)s)")
   p.add_argument("--seed", type=int, default=0, help="draws the initial state (default: %(default)s)")
-  p.add_argument("--hand", default="shadow20", help="shadow20 | leap16 | path/to/hand.xml"
-                 "[:PALM_SITE] (docs/YOUR_HAND.md; default: %(default)s)")
+  add_hand_flag(p)
   p.set_defaults(fn=commands.cmd_render_scenes)
   add_bench_parser(sub)
   return parser
+
+
+def add_hand_flag(p, what: str = "the hand") -> None:
+  from discosyn_jax.config import TrainConfig
+
+  p.add_argument("--hand", default=TrainConfig.hand,
+                 help=f"{what}: shadow20 | leap16 | path/to/hand.xml[:PALM_SITE] "
+                 "(docs/YOUR_HAND.md; default: %(default)s)")
 
 
 def add_device_flags(p) -> None:
