@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import gc
+import logging
 import os
 import signal
 import sys
@@ -184,17 +185,20 @@ class Terminated(KeyboardInterrupt):
 
 
 def _stopper(exception_type):
-  """A handler that stops the command at once, or, where the signal landed inside a
+  """A handler that stops the command at once; where the signal landed inside a
   garbage-collector callback (which would print and drop the exception), at the training
-  loop's next step (discosyn_jax/stop.py)."""
+  loop's next step; a second signal while a stop is under way lets the first one end
+  (discosyn_jax/stop.py)."""
   def handler(signum, frame):
     from discosyn_jax import stop
 
     _quiet_end()  # the command ends: from here on, one line (main sets both back)
+    if stop.under_way():
+      return
     if stop.in_gc_callback(frame):
       stop.defer(exception_type())
       return
-    raise exception_type()
+    raise stop.raised(exception_type())
 
   return handler
 
@@ -207,27 +211,39 @@ def main(argv: list[str] | None = None) -> int:
               for sig, kind in ((signal.SIGTERM, Terminated), (signal.SIGINT, KeyboardInterrupt))
               } if main_thread else {}
   collecting, unraisable = gc.isenabled(), sys.unraisablehook
+  silenced = logging.root.manager.disable
   try:
     return _run(args)
-  except KeyboardInterrupt as err:  # Ctrl-C or SIGTERM: one line (where a run resumes from)
-    how, signum = ("SIGTERM", signal.SIGTERM) if isinstance(err, Terminated) else \
+  except BaseException as err:
+    from discosyn_jax import stop
+
+    stopped = stop.taken(err)  # Ctrl-C or SIGTERM, wherever it landed: one line
+    if stopped is None:
+      raise
+    how, signum = ("SIGTERM", signal.SIGTERM) if isinstance(stopped, Terminated) else \
         ("Ctrl-C", signal.SIGINT)
     _quiet_end()
-    print(f"discosyn: stopped by {how}{': ' + str(err) if str(err) else ''}", file=sys.stderr)
+    print(f"discosyn: stopped by {how}{': ' + str(stopped) if str(stopped) else ''}",
+          file=sys.stderr)
     return 128 + signum
   finally:
     sys.unraisablehook = unraisable
+    logging.disable(silenced)
     if collecting:
       gc.enable()
     for sig, handler in previous.items():  # (None: set outside Python, cannot be set back)
       signal.signal(sig, signal.SIG_DFL if handler is None else handler)
+    if "discosyn_jax.stop" in sys.modules:
+      sys.modules["discosyn_jax.stop"].reset()
 
 
 def _quiet_end() -> None:
   """A stopped command's line is its only one: objects the garbage collector frees while it
-  ends (orbax's event loops, their pipes closed) printed "Exception ignored" tracebacks."""
+  ends (orbax's event loops, their pipes closed) printed "Exception ignored" tracebacks, and
+  JAX logs the traceback of a host callback that a stop interrupted."""
   gc.disable()
   sys.unraisablehook = lambda unraisable: None
+  logging.disable(logging.CRITICAL)
 
 
 def exit_with(code: int) -> None:
@@ -249,30 +265,41 @@ def entry() -> None:
 
 def _run(args) -> int:
   import discosyn_jax
+  from discosyn_jax import stop
 
-  if getattr(args, "distributed", False):  # before anything touches a device
-    from discosyn_jax import devices
-
-    devices.initialize_distributed()
-  discosyn_jax.setup_jax()  # before anything imports MJX (brax, through loop)
-  from discosyn_jax.loop import TrainingDiverged
   try:
+    if getattr(args, "distributed", False):  # before anything touches a device
+      from discosyn_jax import devices
+
+      devices.initialize_distributed()
+    discosyn_jax.setup_jax()  # before anything imports MJX (brax, through loop)
+    from discosyn_jax import checks
+
+    checks.jax_environment(discosyn_jax.XLA_FLAG)
     if getattr(args, "batch", 1) < 1:
       raise commands.UsageError(f"--batch must be at least 1, not {args.batch}")
     if getattr(args, "seed", None) is not None:
-      from discosyn_jax import checks
-
       checks.seed(args.seed, "--seed")
     args.fn(args)
-  except (commands.UsageError, ValueError) as err:
+  except Exception as err:
+    if stop.under_way():  # the stop's own consequence: main says how the command stopped
+      raise
+    return _refused(err)
+  return 0
+
+
+def _refused(err: Exception) -> int:
+  """The one line and exit status of a command that could not do its work."""
+  from discosyn_jax.loop import TrainingDiverged
+
+  if isinstance(err, (commands.UsageError, ValueError)):
     print(f"discosyn: error: {err}", file=sys.stderr)
     return 2
-  except OSError as err:  # a file that cannot be read or written: a path, a full disk
+  if isinstance(err, OSError):  # a file that cannot be read or written: a path, a full disk
     print(f"discosyn: error: {err.filename + ': ' if err.filename else ''}"
           f"{err.strerror or err}", file=sys.stderr)
     return 2
-  except TrainingDiverged as err:  # the run stopped; its checkpoints are kept
+  if isinstance(err, TrainingDiverged):  # the run stopped; its checkpoints are kept
     print(f"discosyn: {err}", file=sys.stderr)
     return 1
-  return 0
-
+  raise err

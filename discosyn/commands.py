@@ -63,7 +63,9 @@ def cmd_render_scenes(args) -> None:
   out = pathlib.Path(args.out)
   names = tasks.expand(args.tasks)  # a bad name or hand fails before the folder is made
   hand = hands.load(args.hand)
-  out.mkdir(parents=True, exist_ok=True)
+  if args.step < 0:
+    raise UsageError(f"--step must be at least 0, not {args.step}")
+  pictures = {}  # every scene first: a failure leaves no folder or half of one
   for name in names:
     env = tasks.make(name, backend="native", hand=hand)
     # a frame from the task's scripted motion (valves: the middle of a stroke, fingers dipped);
@@ -75,8 +77,10 @@ def cmd_render_scenes(args) -> None:
       state = env.step(state, action)
     data = env.physics.to_mjdata(jax.device_get(state.pipeline_state))
     env.task.show(env.mj_model, data, jax.device_get(state.info))
-    path = out / f"{tasks.label(name)}.png"
-    Image.fromarray(render.frames(env.mj_model, data)).save(path)
+    pictures[out / f"{tasks.label(name)}.png"] = render.frames(env.mj_model, data)
+  out.mkdir(parents=True, exist_ok=True)
+  for path, frame in pictures.items():
+    Image.fromarray(frame).save(path)
     print(path)
 
 
@@ -129,6 +133,8 @@ def cmd_train(args) -> None:
 
   if args.out == "":
     raise UsageError("--out is empty: name a run directory (or leave --out out)")
+  if args.resume and args.force:
+    raise UsageError("--resume continues the run in --out and --force replaces it: give one")
   out = pathlib.Path(args.out or f"runs/{args.preset or 'quickstart'}-seed{args.seed or 0}")
   saved = out / layout.CONFIG_FILE
   if args.resume and saved.is_file():  # the run's own config: what a dead writer left settled

@@ -5,9 +5,9 @@ import sys as _sys
 
 # XLA's CPU runtime deadlocked on batched MJX steps with its concurrency-optimised
 # scheduler (5 of 5 runs, DESIGN.md); the flag must be set before jax is imported.
-_FLAG = "--xla_cpu_enable_concurrency_optimized_scheduler=false"
-if _FLAG.split("=")[0] not in _os.environ.get("XLA_FLAGS", ""):
-  _os.environ["XLA_FLAGS"] = (_os.environ.get("XLA_FLAGS", "") + " " + _FLAG).strip()
+XLA_FLAG = "--xla_cpu_enable_concurrency_optimized_scheduler=false"
+if XLA_FLAG.split("=")[0] not in _os.environ.get("XLA_FLAGS", ""):
+  _os.environ["XLA_FLAGS"] = (_os.environ.get("XLA_FLAGS", "") + " " + XLA_FLAG).strip()
 
 # Offscreen rendering (render.py) on a headless Linux machine: MuJoCo picks its OpenGL
 # platform once, when it is imported, so the default (EGL) must be set before that.

@@ -108,3 +108,40 @@ def memory(config, envs) -> None:
     raise ValueError(f"{len(envs)} task(s) x {config.num_envs} envs (and {config.eval_envs} "
                      f"evaluation episodes) need at least {needed / 2**30:,.1f} GiB, more than the "
                      f"{have / 2**30:,.1f} GiB here; lower num_envs or eval_envs")
+
+
+_JAX_ENVIRONMENT_CHECKED: set[tuple[str, str]] = set()
+
+
+def jax_environment(own_xla_flags: str) -> None:
+  """Refuse in one line a JAX_PLATFORMS that names no backend and an XLA_FLAGS holding a flag
+  XLA does not know. XLA ends the process on such a flag the moment JAX first starts a backend
+  (its own fatal line, exit 1), so the user's flags (XLA_FLAGS less `own_xla_flags`, the
+  package's) are tried first in a child process (~1 s, once per process and value; none when
+  the user set none, or when this process's backends already started)."""
+  from jax._src import xla_bridge
+
+  platforms, flags = os.environ.get("JAX_PLATFORMS", ""), os.environ.get("XLA_FLAGS", "")
+  if (platforms, flags) in _JAX_ENVIRONMENT_CHECKED or xla_bridge.backends_are_initialized():
+    return
+  if flags.replace(own_xla_flags, "").strip():
+    import subprocess
+    import sys
+
+    probe = subprocess.run([sys.executable, "-c", "import jax; jax.devices('cpu')"],
+                           env={**os.environ, "JAX_PLATFORMS": "cpu"}, capture_output=True,
+                           text=True)
+    unknown = [line.split("XLA_FLAGS:", 1)[1].strip() for line in probe.stderr.splitlines()
+               if "Unknown flag" in line and "XLA_FLAGS:" in line]
+    if probe.returncode and unknown:
+      raise ValueError(f"environment variable XLA_FLAGS holds a flag XLA does not know: "
+                       f"{unknown[0]}")
+  if platforms.strip():
+    import jax
+
+    try:
+      jax.devices()
+    except RuntimeError as err:
+      reason = str(err).splitlines()[0].split(" (set JAX_PLATFORMS")[0]
+      raise ValueError(f"environment variable JAX_PLATFORMS={platforms!r}: {reason}") from None
+  _JAX_ENVIRONMENT_CHECKED.add((platforms, flags))

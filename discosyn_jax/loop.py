@@ -137,12 +137,13 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *,
       undone = writer.new and not writer.kept
       replaced = writer.undo() if undone else False
       where = _where(at["checkpoint"], undone, replaced)
-      if isinstance(err, KeyboardInterrupt):  # the same class: the CLI tells Ctrl-C from SIGTERM
+      stopped = stop.taken(err)  # Ctrl-C or SIGTERM, also one that aborted a physics callback
+      if stopped is not None:  # the same class: the CLI tells Ctrl-C from SIGTERM
         newest = None if undone else checkpoints.latest(run_dir, warn=lambda _: None)
         if newest:  # (a save the signal cut short may have made a newer one than at's)
           where = (f"it resumes from {newest}: discosyn train --out "
                    f"{shlex.quote(str(run_dir))} --resume")
-        raise type(err)(f"training stopped at step {at['step']}; {where}") from None
+        raise type(stopped)(f"training stopped at step {at['step']}; {where}") from None
       if isinstance(err, OSError):  # a full disk, a folder made read-only, a checkpoint not written
         what = str(err) if isinstance(err, checkpoints.SaveFailed) else \
             f"could not write {err.filename or run_dir}: {err.strerror or err}"

@@ -12,13 +12,23 @@ is full: a file fills the small tmpfs the run is on (FAULT_FILL names it), or el
 tmpfs could be mounted, the disk reports no free space to the checkpoints.
 FAULT_READ_ONLY=FOLDER: instead, FOLDER becomes a read-only mount (a bind mount of itself,
 in the mount namespace the test made).
+FAULT_PHYSICS=1 (train): the toy task steps MuJoCo through the native backend's host
+callback (tests/toy_env.py: PhysicsReach).
+FAULT_STOP_IN_PHYSICS=SIG[,SIG2] (train): as FAULT_PHYSICS, and in the first physics call on the
+main thread after the first checkpoint the process sends itself SIG and waits inside the
+callback, so the signal lands there; SIG2, if named, is sent again while the stopped run puts its folder
+right (pressed twice). Stdout says where each signal was sent, and whether the waiting
+callback ran to its end (a stop not taken where it landed).
 """
 
 import os
 import pathlib
 import shutil
+import signal
 import subprocess
 import sys
+import threading
+import time
 import types
 
 import discosyn_jax
@@ -92,6 +102,53 @@ def starve_after_saves() -> None:
   checkpoints.save = counted
 
 
+def physics_envs(config):
+  from tests.toy_env import PhysicsReach
+
+  return [PhysicsReach(0.3 + 0.1 * n, episode_length=5) for n, _ in enumerate(config.tasks)]
+
+
+def _send_and_wait(signum: int, where: str) -> None:
+  print(f"{signal.Signals(signum).name} sent {where}", flush=True)
+  os.kill(os.getpid(), signum)
+  for _ in range(200):  # 2 s: a handler that raises ends this wait where the signal landed
+    time.sleep(0.01)
+  print(f"the wait {where} ran to its end", flush=True)
+
+
+def stop_in_physics(signals: str) -> None:
+  """FAULT_STOP_IN_PHYSICS: see the module's docstring."""
+  import mujoco.batch
+
+  # XLA runs a CPU computation on the calling thread, or on its own threads when it is
+  # dispatched before its inputs are ready; only the main thread takes a signal: the signal
+  # is sent from a physics call on the main thread, which this makes the rule
+  jax.config.update("jax_cpu_enable_async_dispatch", False)
+  first, *again = [getattr(signal, name) for name in signals.split(",")]
+  saved, sent = [], []
+  save, rollout, latest = checkpoints.save, mujoco.batch.Batch.rollout, checkpoints.latest
+
+  def counted_save(*args, **kwargs):
+    saved.append(save(*args, **kwargs))
+    return saved[-1]
+
+  def stopping_rollout(self, *args, **kwargs):
+    if saved and not sent and threading.current_thread() is threading.main_thread():
+      sent.append(first)
+      _send_and_wait(first, "inside the physics callback")
+    return rollout(self, *args, **kwargs)
+
+  def latest_pressed_again(*args, **kwargs):
+    if sent and again and len(sent) == 1:
+      sent.append(again[0])
+      _send_and_wait(again[0], "while the stopped run puts its folder right")
+    return latest(*args, **kwargs)
+
+  checkpoints.save = counted_save
+  mujoco.batch.Batch.rollout = stopping_rollout
+  checkpoints.latest = latest_pressed_again
+
+
 def saves(run_dir: pathlib.Path) -> None:
   checkpoints.tidy(run_dir)
   newest = checkpoints.latest(run_dir)
@@ -119,6 +176,10 @@ def main() -> int:
   from experiments import presets
 
   tasks.registry.make_envs = toy_envs
+  if os.environ.get("FAULT_PHYSICS") or os.environ.get("FAULT_STOP_IN_PHYSICS"):
+    tasks.registry.make_envs = physics_envs
+  if os.environ.get("FAULT_STOP_IN_PHYSICS"):
+    stop_in_physics(os.environ["FAULT_STOP_IN_PHYSICS"])
   presets.preset = lambda name: TOY
   return cli.main(sys.argv[1:])
 

@@ -455,9 +455,9 @@ def _ended(proc, timeout: float = 60.0) -> tuple[int, str]:
   return proc.returncode, err
 
 
-def _long_run(run_dir, *flags):
+def _long_run(run_dir, *flags, env=None):
   """A worker training the toy task in `run_dir` for far longer than any test waits."""
-  return worker("train", "--out", run_dir, "--no-progress", "--steps", "100000", *flags)
+  return worker("train", "--out", run_dir, "--no-progress", "--steps", "100000", *flags, env=env)
 
 
 def _periodic_steps(run_dir) -> list[int]:
@@ -532,6 +532,70 @@ def test_ctrl_c_before_the_first_checkpoint_of_a_new_run_leaves_nothing(tmp_path
   code, err = _ended(proc)
   assert code == 130 and len(err.strip().splitlines()) == 1, err
   assert err.strip().endswith("the new run made no checkpoint and was removed")
+  assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("signals, status, name", [("SIGINT", 130, "Ctrl-C"),
+                                                   ("SIGINT,SIGINT", 130, "Ctrl-C"),
+                                                   ("SIGTERM,SIGINT", 143, "SIGTERM")])
+def test_a_stop_inside_the_physics_callback_even_pressed_twice_ends_in_one_line(tmp_path, signals,
+                                                                               status, name):
+  """The signal lands inside the native backend's host callback, run by the main thread
+  inside the jitted train step (tests/fault_worker.py: FAULT_STOP_IN_PHYSICS); a second one
+  lands while the stopped run puts its folder right."""
+  run_dir = tmp_path / "run"
+  proc = _long_run(run_dir, env={"FAULT_STOP_IN_PHYSICS": signals})
+  out, err = proc.communicate(timeout=120)
+  code = proc.returncode
+  assert "sent inside the physics callback" in out
+  assert "the wait inside the physics callback ran to its end" not in out  # taken where it landed
+  if "," in signals:  # the second signal was sent, and the clean-up went on through it
+    assert "the wait while the stopped run puts its folder right ran to its end" in out
+  assert code == status and len(err.strip().splitlines()) == 1, err
+  line = err.strip()
+  assert line.startswith(f"discosyn: stopped by {name}: training stopped at step "), line
+  assert line.endswith(f": discosyn train --out {run_dir} --resume"), line
+  resume_from = pathlib.Path(line.split("; it resumes from ")[1].split(": ")[0])
+  assert resume_from.parent.parent == run_dir and checkpoints.verify(resume_from) >= 2
+  assert not (run_dir / layout.LOCK).exists()
+  if signals == "SIGINT":  # and the run goes on from there
+    end = checkpoints.verify(resume_from) + 2
+    resumed = worker("train", "--out", run_dir, "--resume", "--steps", end, "--no-progress",
+                     env={"FAULT_PHYSICS": "1"})
+    code, err = _ended(resumed)
+    assert code == 0, err
+    steps = [row["step"] for row in logs.read_jsonl(run_dir / layout.METRICS_FILE)]
+    assert steps == list(range(1, end + 1))
+
+
+@pytest.mark.parametrize("variable, value, fragment", [
+    ("JAX_PLATFORMS", "bogus", "environment variable JAX_PLATFORMS='bogus': Unable to initialize "
+                               "backend 'bogus'"),
+    ("XLA_FLAGS", "--garbage_flag", "environment variable XLA_FLAGS holds a flag XLA does not "
+                                    "know: --garbage_flag"),
+])
+def test_a_bad_jax_environment_is_one_line_before_the_run_folder(tmp_path, variable, value,
+                                                                 fragment):
+  env = {**os.environ, variable: value}
+  if variable == "XLA_FLAGS":
+    env[variable] = f"{os.environ.get('XLA_FLAGS', '')} {value}"
+  proc = subprocess.run([sys.executable, "-m", "discosyn", "train", "--tasks", "valve1",
+                         "--out", str(tmp_path / "run")], cwd=REPO, env=env, text=True,
+                        capture_output=True, timeout=120)
+  assert proc.returncode == 2, proc.stderr
+  one_error_line(proc.stderr, fragment)
+  assert list(tmp_path.iterdir()) == []
+
+
+def test_resume_and_force_together_are_refused(tmp_path, capsys, toy_tasks):
+  assert cli.main(["train", "--out", str(tmp_path / "run"), "--resume", "--force"]) == 2
+  one_error_line(capsys, "--resume continues the run in --out and --force replaces it")
+  assert list(tmp_path.iterdir()) == []
+
+
+def test_a_bad_scene_picture_step_leaves_no_folder(tmp_path, capsys):
+  assert cli.main(["render-scenes", "valve3", "--step", "-1", "--out", str(tmp_path / "sc")]) == 2
+  one_error_line(capsys, "--step must be at least 0, not -1")
   assert list(tmp_path.iterdir()) == []
 
 

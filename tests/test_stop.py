@@ -1,8 +1,12 @@
 """A Ctrl-C or SIGTERM that lands inside a garbage-collector callback (JAX registers one,
 where Python would print the exception and drop it) is parked and raised by the training
-loop's next step (discosyn_jax/stop.py); anywhere else it stops the command at once."""
+loop's next step (discosyn_jax/stop.py); anywhere else it stops the command at once, and
+whatever error it causes (a jitted computation it aborted from inside a host callback) is
+taken for it; a second signal while it is under way is ignored. (tests/test_faults.py
+lands them inside the physics callback of a real run.)"""
 
 import gc
+import logging
 import signal
 import sys
 
@@ -10,6 +14,16 @@ import pytest
 
 from discosyn import cli
 from discosyn_jax import stop
+
+
+@pytest.fixture(autouse=True)
+def _as_main_leaves_it():
+  """What the handler turns off for the command's end, set back as cli.main does."""
+  yield
+  gc.enable()
+  sys.unraisablehook = sys.__unraisablehook__
+  logging.disable(logging.NOTSET)
+  stop.reset()
 
 
 def _frame_inside_a_gc_callback():
@@ -42,3 +56,16 @@ def test_a_stop_elsewhere_is_raised_at_once():
   assert not stop.in_gc_callback(sys._getframe())
   with pytest.raises(KeyboardInterrupt):
     cli._stopper(KeyboardInterrupt)(signal.SIGINT, sys._getframe())
+
+
+def test_a_stop_raised_is_under_way_a_second_is_ignored_and_what_follows_is_taken_for_it():
+  with pytest.raises(cli.Terminated) as first:
+    cli._stopper(cli.Terminated)(signal.SIGTERM, sys._getframe())
+  assert stop.under_way()
+  cli._stopper(KeyboardInterrupt)(signal.SIGINT, sys._getframe())  # pressed again: ignored
+  # what the stop caused (a computation it aborted from inside a host callback) is the stop
+  assert stop.taken(RuntimeError("INTERNAL: CpuCallback error")) is first.value
+  interrupt = KeyboardInterrupt()
+  assert stop.taken(interrupt) is interrupt
+  stop.reset()
+  assert not stop.under_way() and stop.taken(RuntimeError()) is None

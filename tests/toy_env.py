@@ -65,3 +65,38 @@ class StopOnSignal(ReachAction):
     return state.replace(pipeline_state=(state.pipeline_state, t + 1),
                          obs=state.obs.at[0].set(t + 1),
                          done=(action[0] > 0.5).astype(jnp.float32))
+
+
+_SLIDER = """<mujoco><worldbody><body><joint name="slide" type="slide" axis="1 0 0"/>
+<geom size="0.05" mass="1"/></body></worldbody><actuator><motor joint="slide"/></actuator>
+</mujoco>"""
+
+
+class PhysicsReach(ReachAction):
+  """ReachAction that also steps MuJoCo's C engine through the native backend's host
+  callback (a slider pushed by action[0]): a task whose every step runs the physics
+  callback, as the hand's do, at the toy's cost. Observations and rewards are ReachAction's."""
+
+  def __init__(self, target, **kwargs):
+    import mujoco
+
+    from discosyn_jax.physics.native import NativeBackend
+
+    super().__init__(target, **kwargs)
+    self.mj_model = mujoco.MjModel.from_xml_string(_SLIDER)
+    self.physics = NativeBackend(self.mj_model, n_substeps=2, nthread=1)
+
+  @property
+  def backend(self):
+    return "native"
+
+  def reset(self, rng):
+    state = super().reset(rng)
+    zero = jnp.zeros((self.mj_model.nq,))
+    return state.replace(pipeline_state=(state.pipeline_state, self.physics.init(zero, zero)))
+
+  def step(self, state, action):
+    key, physics = state.pipeline_state
+    physics = self.physics.step(physics, action[:1])
+    state = super().step(state.replace(pipeline_state=key), action)
+    return state.replace(pipeline_state=(state.pipeline_state, physics))
