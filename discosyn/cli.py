@@ -188,9 +188,9 @@ def _stopper(exception_type):
   """A handler that stops the command at once; where the signal landed inside a
   garbage-collector callback (which would print and drop the exception), at the training
   loop's next step; a second signal while a stop is under way lets the first one end
-  (discosyn_jax/stop.py)."""
+  (discosyn_jax/run/stop.py)."""
   def handler(signum, frame):
-    from discosyn_jax import stop
+    from discosyn_jax.run import stop
 
     _quiet_end()  # the command ends: from here on, one line (main sets both back)
     if stop.under_way():
@@ -215,7 +215,7 @@ def main(argv: list[str] | None = None) -> int:
   try:
     return _run(args)
   except BaseException as err:
-    from discosyn_jax import stop
+    from discosyn_jax.run import stop
 
     stopped = stop.taken(err)  # Ctrl-C or SIGTERM, wherever it landed: one line
     if stopped is None:
@@ -233,8 +233,8 @@ def main(argv: list[str] | None = None) -> int:
       gc.enable()
     for sig, handler in previous.items():  # (None: set outside Python, cannot be set back)
       signal.signal(sig, signal.SIG_DFL if handler is None else handler)
-    if "discosyn_jax.stop" in sys.modules:
-      sys.modules["discosyn_jax.stop"].reset()
+    if "discosyn_jax.run.stop" in sys.modules:
+      sys.modules["discosyn_jax.run.stop"].reset()
 
 
 def _quiet_end() -> None:
@@ -265,11 +265,11 @@ def entry() -> None:
 
 def _run(args) -> int:
   import discosyn_jax
-  from discosyn_jax import stop
+  from discosyn_jax.run import stop
 
   try:
     if getattr(args, "distributed", False):  # before anything touches a device
-      from discosyn_jax import devices
+      from discosyn_jax.training import devices
 
       devices.initialize_distributed()
     discosyn_jax.setup_jax()  # before anything imports MJX (brax, through loop)
@@ -290,7 +290,7 @@ def _run(args) -> int:
 
 def _refused(err: Exception) -> int:
   """The one line and exit status of a command that could not do its work."""
-  from discosyn_jax.loop import TrainingDiverged
+  from discosyn_jax.training.loop import TrainingDiverged
 
   if isinstance(err, (commands.UsageError, ValueError)):
     print(f"discosyn: error: {err}", file=sys.stderr)

@@ -7,7 +7,7 @@ import pathlib
 import shlex
 import time
 
-from discosyn_jax import layout
+from discosyn_jax.run import layout
 
 
 class UsageError(Exception):
@@ -29,7 +29,7 @@ def cmd_demo(args) -> None:
   import jax
 
   import tasks
-  from discosyn_jax import rollouts
+  from discosyn_jax.env import rollouts
 
   print(f"random policy, {args.batch} envs x one episode per task")
   print(f"{'task':8s} {'backend':7s} {'obs':>4s} {'build s':>8s} {'compile s':>9s} {'env steps/s':>11s} "
@@ -58,7 +58,8 @@ def cmd_render_scenes(args) -> None:
   from PIL import Image
 
   import tasks
-  from discosyn_jax import hands, render, scripted
+  from discosyn_jax.env import hands, scripted
+  from discosyn_jax.viz import render
 
   out = pathlib.Path(args.out)
   names = tasks.expand(args.tasks)  # a bad name or hand fails before the folder is made
@@ -111,14 +112,14 @@ def train_config(args, base=None):
   if args.tasks:
     changes["tasks"] = tuple(tasks.expand(args.tasks))
   if args.hand:
-    from discosyn_jax import hands
+    from discosyn_jax.env import hands
 
     changes["hand"] = hands.load(args.hand).name  # checked before the folder is made
   if args.decoder_from:
-    from discosyn_jax import synergies
+    from discosyn_jax.synergies import fitting
 
-    meta, _ = synergies.read(args.decoder_from)
-    frozen = synergies.frozen_fields(meta, args.decoder_from)
+    meta, _ = fitting.read(args.decoder_from)
+    frozen = fitting.frozen_fields(meta, args.decoder_from)
     changes = {**frozen, **changes}  # flags given explicitly win (e.g. --alpha2)
     if changes["decoder"] != frozen["decoder"] or changes["n_synergies"] != frozen["n_synergies"]:
       raise UsageError(f"--decoder-from {args.decoder_from} holds a {frozen['decoder']} decoder "
@@ -129,7 +130,8 @@ def train_config(args, base=None):
 def cmd_train(args) -> None:
   import tasks
   from discosyn_jax import config as config_lib
-  from discosyn_jax import devices, loop, runs
+  from discosyn_jax.run import owner
+  from discosyn_jax.training import devices, loop
 
   if args.out == "":
     raise UsageError("--out is empty: name a run directory (or leave --out out)")
@@ -138,7 +140,7 @@ def cmd_train(args) -> None:
   out = pathlib.Path(args.out or f"runs/{args.preset or 'quickstart'}-seed{args.seed or 0}")
   saved = out / layout.CONFIG_FILE
   if args.resume and saved.is_file():  # the run's own config: what a dead writer left settled
-    runs.take_over(out)
+    owner.take_over(out)
   base = config_lib.load(saved) if args.resume and saved.is_file() else None
   config = train_config(args, base)
   devices.mesh_for(config, args.devices)  # a bad device count fails before the run directory
@@ -165,10 +167,10 @@ def next_commands(out: pathlib.Path, step, config, results) -> str:
 
 
 def cmd_eval(args) -> None:
-  import tasks
   import jax
 
-  from discosyn_jax import evaluation, loop
+  import tasks
+  from discosyn_jax.training import evaluation, loop
 
   changes = {"backend": args.backend} if args.backend else {}
   if args.episodes is not None:
@@ -194,9 +196,11 @@ def _check_scenes(trainer, run, what: str) -> None:
 
 def cmd_synergies(args) -> None:
   import tasks
-  from discosyn_jax import loop, run_folder, synergy_pictures
+  from discosyn_jax.run import reading
+  from discosyn_jax.training import loop
+  from discosyn_jax.viz import synergy_pictures
 
-  run_dir = run_folder.find_run_dir(args.run)
+  run_dir = reading.find_run_dir(args.run)
   trainer, state = loop.load_trained(args.run, tasks.trainer, backend="native")  # host physics: pictures only
   _check_scenes(trainer, args.run, "picture")
   step = int(state.step)
@@ -210,9 +214,11 @@ def cmd_synergies(args) -> None:
 
 def cmd_render(args) -> None:
   import tasks
-  from discosyn_jax import loop, run_folder, videos
+  from discosyn_jax.run import reading
+  from discosyn_jax.training import loop
+  from discosyn_jax.viz import videos
 
-  run_dir = run_folder.find_run_dir(args.run)
+  run_dir = reading.find_run_dir(args.run)
   trainer, state = loop.load_trained(args.run, tasks.trainer, backend="native")
   _check_scenes(trainer, args.run, "film")
   videos.task_index(trainer.config, args.task)  # a bad task fails before any rollout
@@ -244,11 +250,11 @@ def cmd_experiment(args) -> None:
 
 def cmd_upgrade(args) -> None:
   from discosyn_jax import config as config_lib
-  from discosyn_jax import run_folder, runs
+  from discosyn_jax.run import owner, reading
 
   for run in map(pathlib.Path, args.runs):
-    runs.refuse_if_written(run)
-    added = config_lib.upgrade(run_folder.find_run_dir(run) / layout.CONFIG_FILE)
+    owner.refuse_if_written(run)
+    added = config_lib.upgrade(reading.find_run_dir(run) / layout.CONFIG_FILE)
     print(f"{run}: {'added ' + ', '.join(added) if added else 'up to date'}")
 
 

@@ -39,7 +39,7 @@ def setup_jax() -> None:
     if not line.startswith(("Failed to import warp", "Failed to import mujoco_warp")):
       print(line, file=_sys.stdout)
 
-  from discosyn_jax import compile_cache
+  from discosyn_jax.run import compile_cache
 
   compile_cache.enable()
   _jax_ready = True

@@ -8,18 +8,21 @@ network and the environments when a run is resumed or evaluated.
 from __future__ import annotations
 
 import dataclasses
-import json
-import pathlib
 import functools
 import inspect
 import io
+import json
+import pathlib
 import tokenize
 from typing import Any
 
 from discosyn_jax import atomic, checks
 
 DECODERS = ("linear", "mlp", "identity")
-DECODER_INITS = ("random", "physics")
+# the priors a linear decoder may start from (decoder_init): what the pushed actions are read
+# by, and how the tasks' metrics make one subspace (discosyn_jax/synergies/physics_prior.py)
+PRIORS = {"physics": ("objects", "trace"), "reward": ("reward", "share")}
+DECODER_INITS = ("random", *PRIORS)
 BACKENDS = ("auto", "native", "mjx")  # auto: native on a CPU, mjx on an accelerator
 CONTROL_DT = 0.04  # s: one control step of every task
 # The physics of the tasks (tasks/registry.py, physics_overrides): "reference" is 10 MuJoCo
@@ -56,25 +59,26 @@ class TrainConfig:
   decoder: str = "linear"  # linear (a b x 20 matrix) | mlp | identity (full-action PPO)
   decoder_bias: bool = True  # linear decoder: a = W z + c rather than W z
   freeze_decoder: bool = False  # decoder parameters outside the optimiser
-  # the start of a linear decoder: random (the paper's), or physics: each seed's random
-  # decoder turned into the subspace of the actions that move the tasks' objects most, the
-  # same subspace for every seed (physics_prior.py; issue 26)
+  # the start of a linear decoder: random (the paper's), or a prior, the same subspace for
+  # every seed, into which each seed's random decoder is turned (physics_prior.py): physics,
+  # the actions that move the tasks' objects most, pooled; reward, the actions that change
+  # what each task rewards, each task its share of the directions in turn
   decoder_init: str = "random"
   # the initial decoder: a run directory (its latest checkpoint's decoder) or a synergy file
-  # written by discosyn_jax.synergies (PCA / autoencoder); "" starts from a random one
+  # written by discosyn_jax.synergies.fitting (PCA / autoencoder); "" starts from a random one
   decoder_from: str = ""
   # False: a = the decoder's mean during training too (the sequential baselines' fixed spaces)
   decoder_noise: bool = True
   # the decoder reads tanh(z): synergy activations bounded to [-1, 1], so that the heads
-  # cannot make up for any decoder by driving z far out (issue 13's hypothesis)
+  # cannot make up for any decoder by driving z far out (a hypothesis, docs/TRAINING_NOTES.md)
   squash_z: bool = False
   # AdamW weight decay of the decoder's weights, a tie-breaker between adequate synergy
-  # spaces: among the decoders that serve the tasks equally well, the smallest (issue 26;
-  # 0: the paper's update)
+  # spaces: among the decoders that serve the tasks equally well, the smallest
+  # (0: the paper's update)
   decoder_weight_decay: float = 0.0
   # the decay falls linearly to nothing over this many train steps, then stays off (0:
   # constant): the tie is broken by the decay integrated early, and a decay still on at the
-  # end costs the decoder its reach (issue 26); a resumed run keeps its schedule
+  # end costs the decoder its reach (docs/TRAINING_NOTES.md); a resumed run keeps its schedule
   decoder_weight_decay_steps: int = 0
   # -- the extended reward, paper Eq. 2: alpha1 H(pi(z|s,n)) + alpha2 log q(z|a) + alpha3 H(p(a|z)) --
   alpha1: float = 1e-3  # weight of the entropy bonus H(pi(z|s,n)) in the loss
@@ -147,9 +151,9 @@ class TrainConfig:
       raise ValueError(f"the synergy count must be between 1 and 20, not {self.n_synergies}")
     if self.decoder_init not in DECODER_INITS:
       raise ValueError(f"unknown decoder_init {self.decoder_init!r}; known: {', '.join(DECODER_INITS)}")
-    if self.decoder_init == "physics" and (self.decoder != "linear" or self.decoder_from):
-      raise ValueError("the physics prior starts a linear decoder of its own: decoder linear, "
-                       "no decoder_from")
+    if self.decoder_init in PRIORS and (self.decoder != "linear" or self.decoder_from):
+      raise ValueError(f"the {self.decoder_init} prior starts a linear decoder of its own: "
+                       "decoder linear, no decoder_from")
     if self.decoder_from and self.decoder == "identity":
       raise ValueError("the identity decoder (full-action PPO) cannot take a decoder_from")
     if self.freeze_decoder and (self.decoder_weight_decay or self.decoder_weight_decay_steps):

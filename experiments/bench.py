@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-  from discosyn_jax.train import Trainer
+  from discosyn_jax.training.train import Trainer
 
 # JAX, MuJoCo and the trainer are imported where they are used: `discosyn --help` builds
 # this parser without them.
@@ -117,7 +117,7 @@ def update_runner(trainer: Trainer, state):
   """The PPO update of a train step alone, on random samples of the step's shapes."""
   import jax
 
-  from discosyn_jax import ppo
+  from discosyn_jax.agent import ppo
 
   n = trainer.config.num_envs * trainer.config.unroll_length
   keys = iter(jax.random.split(jax.random.PRNGKey(0), 6 * len(trainer.obs_sizes)))

@@ -1,4 +1,4 @@
-"""Why does the DiscoSyn decoder not learn (issue 13)? One variant of `set1-disco3-linear`
+"""Why does the DiscoSyn decoder not learn? One variant of `set1-disco3-linear`
 (as it was before z was bounded, unless a variant says) per hypothesis, trained and summarised side by side.
 
   python experiments/decoder_hypotheses.py --variants baseline squash --seeds 0 1 --steps 100
@@ -24,14 +24,15 @@ import discosyn_jax  # noqa: E402
 discosyn_jax.setup_jax()  # the compile cache; MJX imported quietly
 
 from discosyn_jax import config as config_lib  # noqa: E402
-from discosyn_jax import layout, logs, loop, run_folder  # noqa: E402
+from discosyn_jax.run import layout, logs, reading
+from discosyn_jax.training import loop  # noqa: E402
 from experiments import presets  # noqa: E402
 
 # variant -> TrainConfig changes to set1-disco3-linear (one hypothesis each)
 VARIANTS = {
-    "baseline": dict(squash_z=False),  # the preset as it was before issue 13
+    "baseline": dict(squash_z=False),  # the preset as it was before z was bounded
     "random": dict(squash_z=False, freeze_decoder=True),  # its control: decoder frozen at start
-    "squash": dict(squash_z=True),  # z bounded: a = W tanh(z) + c (the preset since issue 13)
+    "squash": dict(squash_z=True),  # z bounded: a = W tanh(z) + c (the preset now)
     "squash-random": dict(squash_z=True, freeze_decoder=True),
     "nobias": dict(squash_z=False, decoder_bias=False),  # the paper's a = z phi
     "decoder-noise": dict(squash_z=False, init_z_std=0.3, init_action_std=0.6),  # 20-D exploring
@@ -83,7 +84,7 @@ def main(argv=None):
       config = base.replace(seed=seed, steps=args.steps, eval_every=args.eval_every,
                             checkpoint_every=args.eval_every, **VARIANTS[variant]).validate()
       run = out / f"{variant}-seed{seed}"
-      if not run_folder.finished(run, config):
+      if not reading.finished(run, config):
         loop.train(config, run, resume=(run / layout.CONFIG_FILE).is_file(), progress=False)
   print(summary(out))
 

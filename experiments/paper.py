@@ -43,8 +43,11 @@ import jax
 import numpy as np
 
 import tasks
-from discosyn_jax import evaluation, hands, layout, loop, run_folder, synergies
 from discosyn_jax.config import TrainConfig
+from discosyn_jax.env import hands
+from discosyn_jax.run import layout, reading
+from discosyn_jax.synergies import fitting
+from discosyn_jax.training import evaluation, loop
 from experiments import presets, report_runs
 
 # the task sets of tasks/sets.py, the unseen tasks split by the set whose synergies they take
@@ -94,7 +97,7 @@ class Train:
   needs: tuple[str, ...] = ()  # the steps whose folders this one reads
 
   def done(self, out: pathlib.Path) -> bool:
-    return run_folder.finished(out / self.name, self.config)
+    return reading.finished(out / self.name, self.config)
 
   def run(self, out: pathlib.Path, make_trainer, progress: bool, log) -> None:
     run_dir = out / self.name
@@ -126,7 +129,7 @@ class Fit:
     config = trainer.config
     key = jax.random.PRNGKey(config.seed + 2)
     rollouts = evaluation.rollouts(trainer, state.params, state.normalizers, key, self.episodes)
-    per_task = synergies.applied_actions(rollouts)
+    per_task = fitting.applied_actions(rollouts)
     actions = np.concatenate(list(per_task.values()))
     folder = out / self.name
     folder.mkdir(parents=True, exist_ok=True)
@@ -137,11 +140,11 @@ class Fit:
         log(f"{self.name}: {actions.shape[0]} actions are too few for {k} synergies; skipped")
         continue
       for method, fit in (
-          ("PCA", lambda: synergies.fit_pca(actions, k)),
-          ("AE", lambda: synergies.fit_autoencoder(actions, k, self.hidden,
+          ("PCA", lambda: fitting.fit_pca(actions, k)),
+          ("AE", lambda: fitting.fit_autoencoder(actions, k, self.hidden,
                                                    steps=self.autoencoder_steps, seed=config.seed))):
         params, ev = fit()
-        synergies.save(folder / f"{method.lower()}{k}.npz", params,
+        fitting.save(folder / f"{method.lower()}{k}.npz", params,
                        fitted_meta(method, k, self.hidden), method=method,
                        explained_variance=ev, source=self.source)
         variance[method][str(k)] = ev
@@ -173,12 +176,12 @@ class Match:
     return (out / self.name / self.FILE).is_file()
 
   def run(self, out: pathlib.Path, make_trainer, progress: bool, log) -> None:
-    from discosyn_jax import train
+    from discosyn_jax.agent import networks
 
-    config = run_folder.load_run(out / self.source)[0]
-    meta, learned = synergies.read(out / self.source)
-    start = train.random_decoder(config, int(np.shape(learned["log_std"])[-1]))
-    synergies.save(out / self.name / self.FILE, synergies.in_subspace_of(learned, start),
+    config = reading.load_run(out / self.source)[0]
+    meta, learned = fitting.read(out / self.source)
+    start = networks.random_decoder(config, int(np.shape(learned["log_std"])[-1]))
+    fitting.save(out / self.name / self.FILE, fitting.in_subspace_of(learned, start),
                    meta, source=self.source)
     log(f"{self.name}: the learned decoder of {self.source} in its random initial subspace")
 
@@ -211,7 +214,7 @@ class Planner:
 
   def discosyn(self, task_set: str, b: int, kind: str, variant: str = "") -> Train:
     config = self._config(presets.preset(f"{task_set}-disco{b}-{kind}{variant}"), self.sets[task_set])
-    method = synergies.method_name(config)
+    method = fitting.method_name(config)
     return Train(self._folder(method, task_set), config,
                  _meta(f"discosyn-{task_set}", method, task_set, self.seed, self.scale))
 
@@ -221,7 +224,7 @@ class Planner:
     starts from, whatever the tasks)."""
     config = learned.config.replace(freeze_decoder=True, decoder_from="", decoder_weight_decay=0.0,
                                     decoder_weight_decay_steps=0, decoder_init="random").validate()
-    method = synergies.method_name(config)
+    method = fitting.method_name(config)
     label = task_set.removeprefix("unseen-")
     name = (f"{experiment}-random-{self.tag}" if label == experiment
             else self._folder(method, task_set))
@@ -237,9 +240,9 @@ class Planner:
       method = f"{random.meta['method']}-zfree"
       steps.append(Train(self._folder(method, task_set),
                          random.config.replace(squash_z=False).validate(), meta(method)))
-    if learned.config.decoder_init == "physics":  # the prior's start frozen: what learning adds
-      prior = random.config.replace(decoder_init="physics").validate()
-      method = synergies.method_name(prior)
+    if learned.config.decoder_init != "random":  # the prior's start frozen: what learning adds
+      prior = random.config.replace(decoder_init=learned.config.decoder_init).validate()
+      method = fitting.method_name(prior)
       steps.append(Train(self._folder(method, task_set), prior, meta(method)))
     if learned.config.decoder == "linear":
       # named after the learned run it copies: Random3-L-matched, Random3-L-matched-wd8a200
@@ -266,7 +269,7 @@ class Planner:
                                                           self.scale))
     steps = [ppo, fit]
     for method, k in BASELINES:
-      frozen = synergies.frozen_fields(fitted_meta(method, k, hidden),
+      frozen = fitting.frozen_fields(fitted_meta(method, k, hidden),
                                        self.out / fit.name / f"{method.lower()}{k}.npz")
       config = self._config(ppo.config, self.sets[task_set], init_z_std=1.0, **frozen)
       steps.append(Train(self._folder(f"{method}{k}", task_set), config,
@@ -279,18 +282,18 @@ class Planner:
     source_set, b, kind = TRANSFER_FROM[task_set]
     base = presets.preset(f"{source_set}-disco{b}-{kind}")
     if self.decoder_from:
-      meta, _ = synergies.read(self.decoder_from)
+      meta, _ = fitting.read(self.decoder_from)
       source, path = None, self.decoder_from
     else:
       source = self.discosyn(source_set, b, kind)
-      meta, path = {k: getattr(source.config, k) for k in synergies.ARCHITECTURE}, self.out / source.name
-    method = synergies.method_name(meta)
+      meta, path = {k: getattr(source.config, k) for k in fitting.ARCHITECTURE}, self.out / source.name
+    method = fitting.method_name(meta)
     # folders: transfer-synergies-set1-seed0 (unseen tasks of set #1), sparse-synergies-seed0
     label = task_set.removeprefix("unseen-")
     folder = lambda what: (f"{experiment}-{what}-{self.tag}" if label == experiment
                            else self._folder(f"{experiment}-{what}", label))
     frozen = Train(folder("synergies"),
-                   self._config(base, self.sets[task_set], **synergies.frozen_fields(meta, path)),
+                   self._config(base, self.sets[task_set], **fitting.frozen_fields(meta, path)),
                    _meta(experiment, f"{method} frozen", task_set, self.seed, self.scale),
                    needs=(source.name,) if source else ())
     scratch = self.ppo(task_set, experiment)
@@ -314,7 +317,7 @@ class Planner:
       return steps
     if experiment.startswith("discosyn-") and experiment[9:] in DISCOSYN_SIZES:
       task_set = experiment[9:]
-      # the decayed variant where it is measured to work (docs/TRAINING_NOTES.md, issue 26)
+      # the decayed variant where it is measured to work (docs/TRAINING_NOTES.md)
       # on the hand's sets both starts of the linear decoder, the paper's and the physics
       # prior's; on the test bed the paper's and the decayed variant (measured to work there)
       kinds = ((("linear", ""), ("mlp", ""), ("linear", presets.DECAYED))

@@ -79,7 +79,7 @@ def final_success(metrics_success, done, episode_length):
 
 
 def object_qpos(env) -> np.ndarray:
-  from discosyn_jax import hands
+  from discosyn_jax.env import hands
 
   return np.setdiff1d(np.arange(env.mj_model.nq), hands.qpos_indices(env.mj_model))
 
@@ -90,9 +90,9 @@ def fidelity(env, name: str, episodes: int, long_episodes: int, long_steps: int,
   import jax
   import jax.numpy as jnp
 
-  from discosyn_jax import hands, scripted
-  from discosyn_jax.physics.native import deepest_penetration
-  from discosyn_jax.rollouts import run_episode
+  from discosyn_jax.env import hands, scripted
+  from discosyn_jax.env.physics.native import deepest_penetration
+  from discosyn_jax.env.rollouts import run_episode
 
   keys = jax.random.split(jax.random.PRNGKey(seed), episodes)
   script = jnp.asarray(scripted.for_task(name, env.episode_length, env.dt, env.hand.name))

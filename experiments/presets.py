@@ -4,8 +4,8 @@ Each preset is a TrainConfig (discosyn_jax/config.py), so a typo in a field name
 import, not in the middle of a run. The paper's runs (Tables I and II) are here by name,
 `<set>-disco<b>-<linear|mlp>` and `<set>-ppo`; experiments/paper.py runs them at a scale.
 On set #1 the linear DiscoSyn presets start every seed's decoder from the physics prior
-(issue 26: one synergy space from every seed, and more success than the strongest random
-control); `<set>-disco<b>-linear-prior` and `-paper` name either start on every set.
+(the discovery targets: one synergy space from every seed, and more success than the strongest
+random control); `<set>-disco<b>-linear-prior` and `-paper` name either start on every set.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ CPU_RUN = dict(num_envs=128, unroll_length=20, num_minibatches=8, update_epochs=
 # the test bed: pure JAX, 2.05 M env steps of four tasks in 2-3 min on 2 busy cores (2026-12-02)
 PLANTED_RUN = dict(num_envs=64, unroll_length=20, num_minibatches=4, update_epochs=4, steps=400,
                    eval_every=25, eval_envs=64, checkpoint_every=100)
-# issue 26's tie-breaker: a decoder weight decay that falls from 8 to nothing over 200 train
+# a tie-breaker: a decoder weight decay that falls from 8 to nothing over 200 train
 # steps (the test bed: one span from every seed, docs/TRAINING_NOTES.md); `<preset>-decay`
 DECAY = dict(decoder_weight_decay=8.0, decoder_weight_decay_steps=200)
 DECAYED = "-decay"
@@ -27,11 +27,15 @@ DECAYED = "-decay"
 # (set #1) it shrank the decoder until the valves failed (success 0.06-0.16), so there it is
 # a preset to try, not a row of the tables
 DECAYED_SETS = ("planted", "planted_slack")
-# issue 26's tie-breaker that works on the hand: every seed's decoder starts in the subspace
-# of the actions that move the objects most (discosyn_jax/physics_prior.py); `<preset>-prior`,
+# the tie-breaker that works on the hand: every seed's decoder starts in the subspace
+# of the actions that move the objects most (discosyn_jax/synergies/physics_prior.py); `<preset>-prior`,
 # and `<preset>-paper` for the paper's random start
 PRIOR = dict(decoder_init="physics")
 PRIORED, PAPER = "-prior", "-paper"
+# the task-aware prior: the actions that change what each task rewards, each task its share
+# of the directions in turn (physics_prior.py); `<preset>-reward`
+REWARD = dict(decoder_init="reward")
+REWARDED = "-reward"
 # where the prior is the start of the plain linear preset: set #1 (5 seeds: +0.20 over the
 # strongest control). On set #2 it lost the screw (0 % on 2 seeds; docs/TRAINING_NOTES.md)
 PRIOR_SETS = ("set1",)
@@ -57,17 +61,18 @@ for _set, _sizes in (("set1", (3, 4)), ("set2", (4, 6))):
   for _b in _sizes:
     for _kind in ("linear", "mlp"):
       # z bounded (squash_z): the decoder then has to learn its synergies; with z free a
-      # random decoder did as well (issue 13, docs/TRAINING_NOTES.md)
+      # random decoder did as well (docs/TRAINING_NOTES.md)
       PRESETS[f"{_set}-disco{_b}-{_kind}"] = TrainConfig(tasks=_tasks, n_synergies=_b,
                                                         decoder=_kind, squash_z=True, **CPU_RUN)
     _paper = PRESETS[f"{_set}-disco{_b}-linear"]
     PRESETS[f"{_set}-disco{_b}-linear{PAPER}"] = _paper
     PRESETS[f"{_set}-disco{_b}-linear{PRIORED}"] = _paper.replace(**PRIOR)
+    PRESETS[f"{_set}-disco{_b}-linear{REWARDED}"] = _paper.replace(**REWARD)
     PRESETS[f"{_set}-disco{_b}-linear{DECAYED}"] = _paper.replace(**DECAY)
     if _set in PRIOR_SETS:
       PRESETS[f"{_set}-disco{_b}-linear"] = _paper.replace(**PRIOR)
 
-# DiscoSyn3 on the planted test bed: (a) one adequate subspace, (b) many (issue 26)
+# DiscoSyn3 on the planted test bed: (a) one adequate subspace, (b) many
 for _set in ("planted", "planted_slack"):
   _tasks = TASK_SETS[_set]
   for _kind in ("linear", "mlp"):

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from discosyn_jax import layout, logs
+from discosyn_jax.run import layout, logs
 from experiments import report_figures
 from experiments.report_runs import Run, find, order
 from tasks import TASK_SETS
@@ -54,7 +54,7 @@ def _cell(values: np.ndarray, threshold: float, paper: str | None) -> str:
 
 def _mean_over_tasks(group: list[Run], task_names) -> str:
   """Each seed's success averaged over the set's tasks, then the mean (min-max) over seeds:
-  the figure issue 13's targets compare."""
+  the figure the targets for a learned decoder compare (docs/RESULTS.md)."""
   per_seed = np.array([np.mean([r.final[f"{t}/success"] for t in task_names]) for r in group
                        if all(f"{t}/success" in r.final for t in task_names)])
   if per_seed.size == 0:
@@ -152,7 +152,7 @@ def discovery_table(runs: list[Run]) -> str:
   (diagnostics.py) of the seeds' learned subspaces, pair by pair, beside those of the same
   seeds' initial decoders; each seed's overlap with its own start, and with the planted
   span on planted tasks (both as logged at the run's last step); and the chance level."""
-  from discosyn_jax import diagnostics, discovery
+  from discosyn_jax.synergies import diagnostics, discovery
 
   lines = ["| method | set | learned, seed pairs | initial, seed pairs | each seed with its start "
            "| each seed with the planted span | chance |", "|---|---|---|---|---|---|---|"]

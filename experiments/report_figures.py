@@ -8,7 +8,7 @@ import pathlib
 
 import numpy as np
 
-from discosyn_jax import layout, logs
+from discosyn_jax.run import layout, logs
 from experiments.report_runs import Run, order
 
 
@@ -69,7 +69,7 @@ def overlap_curves(runs: list[Run], path: pathlib.Path, title: str) -> pathlib.P
   matplotlib.use("Agg")
   import matplotlib.pyplot as plt
 
-  from discosyn_jax import diagnostics
+  from discosyn_jax.synergies import diagnostics
 
   rows = {r.path: [row for row in logs.read_log(r.path / layout.METRICS_FILE) if "decoder/change" in row]
           for r in runs}
@@ -105,9 +105,8 @@ def tsne(run: Run, path: pathlib.Path, episodes: int = 8, points: int = 2000,
   import matplotlib.pyplot as plt
   from sklearn.manifold import TSNE
 
-  from discosyn_jax import evaluation, loop
-
   import tasks
+  from discosyn_jax.training import evaluation, loop
 
   trainer, state = loop.load_trained(run.path, make_trainer or tasks.trainer)
   rollouts = evaluation.rollouts(trainer, state.params, state.normalizers, jax.random.PRNGKey(0), episodes)

@@ -10,8 +10,9 @@ import pathlib
 from typing import Any
 
 from discosyn_jax import config as config_lib
-from discosyn_jax import hands, layout, logs
 from discosyn_jax.config import TrainConfig
+from discosyn_jax.env import hands
+from discosyn_jax.run import layout, logs
 from experiments.presets import DECAY
 from tasks import TASK_SETS
 
@@ -67,16 +68,16 @@ def action_size(task: str, hand: str) -> int:
 
 
 def _method_of(config: TrainConfig) -> str:
-  from discosyn_jax import synergies
+  from discosyn_jax.synergies import fitting
 
   if config.decoder == "identity":
     return "PPO"
   if not config.decoder_from:
-    return synergies.method_name(config)
+    return fitting.method_name(config)
   try:  # a synergy file knows its method (PCA, AE); a run folder is DiscoSyn's
-    return synergies.method_name(synergies.read(config.decoder_from)[0]) + " frozen"
+    return fitting.method_name(fitting.read(config.decoder_from)[0]) + " frozen"
   except ValueError:
-    return synergies.method_name(config) + " frozen"
+    return fitting.method_name(config) + " frozen"
 
 
 def _set_of(config: TrainConfig) -> str:
@@ -87,10 +88,10 @@ def _set_of(config: TrainConfig) -> str:
 
 
 def load_run(path: pathlib.Path) -> Run:
-  from discosyn_jax import checkpoints, runs
+  from discosyn_jax.run import checkpoints, owner
 
   config = config_lib.load(path / layout.CONFIG_FILE)
-  writer = runs.writer_of(path)
+  writer = owner.writer_of(path)
   if writer:  # its logs are read as far as they go now
     checkpoints.warn(f"{path} is being written by {writer}: read its logs as they are now")
   meta_file = path / layout.EXPERIMENT_FILE

@@ -1,7 +1,7 @@
 """Whether two folders of runs logged the same numbers: every metrics.jsonl and eval.jsonl
 under BEFORE against the file of the same path under AFTER, row by row and value by value,
 the wall-clock fields aside (`wall_s`, `env_steps_per_s`: the only figures a rerun of a
-seeded command may change). Issue 28's proof that a restructuring changed no behaviour:
+seeded command may change). The proof that a restructuring changed no behaviour:
 
   python -m experiments.same_logs BEFORE AFTER     # exit 0: every file the same
 """

@@ -20,9 +20,9 @@ import jax.numpy as jnp
 import numpy as np
 
 import tasks
-from discosyn_jax import hands, scripted
-from discosyn_jax.physics.native import deepest_penetration
-from discosyn_jax.rollouts import run_episode
+from discosyn_jax.env import hands, scripted
+from discosyn_jax.env.physics.native import deepest_penetration
+from discosyn_jax.env.rollouts import run_episode
 from experiments import physics_study
 
 DEFAULT_TASKS = ("dice", "weight_pull", "screw", "valve_cylinder", "valve_cw", "screw_topdown", "valve_goal")
@@ -47,7 +47,7 @@ def progress(env, qpos: np.ndarray, info) -> tuple[str, np.ndarray]:
 
 
 def _view(qpos):
-  from discosyn_jax.physics import PhysicsView
+  from discosyn_jax.env.physics import PhysicsView
 
   return PhysicsView(qpos=qpos, qvel=jnp.zeros(0), sensordata=jnp.zeros(0))
 

@@ -1,4 +1,4 @@
-"""Can full-action PPO learn each task (issue 16)? One `valve3-ppo`-style run per task and
+"""Can full-action PPO learn each task? One `valve3-ppo`-style run per task and
 seed, up to 10 M env steps, ended at the first evaluation at which its deterministic success
 reaches 80 % (`train --stop-at`); then the table of the curves.
 
@@ -25,10 +25,11 @@ import discosyn_jax  # noqa: E402
 discosyn_jax.setup_jax()  # the compile cache; MJX imported quietly
 
 from discosyn_jax import config as config_lib  # noqa: E402
-from discosyn_jax import layout, logs, loop, run_folder  # noqa: E402
+from discosyn_jax.run import layout, logs, reading
+from discosyn_jax.training import loop  # noqa: E402
 from experiments import presets  # noqa: E402
 
-TARGET = 0.8  # deterministic success that counts as learnt (issue 16)
+TARGET = 0.8  # deterministic success that counts as learnt
 MAX_ENV_STEPS = 10_000_000
 
 
@@ -79,7 +80,7 @@ def main(argv=None):
     for seed in args.seeds:
       config = config_for(task, seed, args.eval_every)
       run = out / f"{task}-seed{seed}"
-      if not run_folder.finished(run, config):
+      if not reading.finished(run, config):
         loop.train(config, run, resume=(run / layout.CONFIG_FILE).is_file(), progress=False,
                    stop_at=TARGET)
   print(summary(out))

@@ -18,8 +18,8 @@ import jax.numpy as jnp
 import numpy as np
 
 import tasks
-from discosyn_jax import hands, scripted
-from discosyn_jax.physics.native import deepest_penetration
+from discosyn_jax.env import hands, scripted
+from discosyn_jax.env.physics.native import deepest_penetration
 
 
 def rollout(env, actions_fn, episodes: int, seed: int):

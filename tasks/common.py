@@ -8,7 +8,7 @@ import jax.numpy as jnp
 import mujoco
 import numpy as np
 
-from discosyn_jax import hands
+from discosyn_jax.env import hands
 
 
 class HandJoints:

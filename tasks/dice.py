@@ -35,9 +35,9 @@ import jax
 import jax.numpy as jnp
 import mujoco
 
-from discosyn_jax import hands
-from discosyn_jax.physics import PhysicsView
-from discosyn_jax.task import Info, Task, TaskConfig
+from discosyn_jax.env import hands
+from discosyn_jax.env.physics import PhysicsView
+from discosyn_jax.env.task import Info, Task, TaskConfig
 from tasks import common
 
 PALM_SURFACE_Z = 0.2361  # world height of the upturned palm's surface (hands.PALM_UP)

@@ -1,6 +1,6 @@
 """Planted synergies: pure-JAX tasks (no physics) whose target postures lie in one known
 subspace of the 20 actions, so that whether a decoder finds *the* synergy space of a task
-set, and not just an adequate one, can be measured (issue 26).
+set, and not just an adequate one, can be measured.
 
   planted span U    an orthonormal (20, rank) basis drawn once from SPAN_SEED: every run
                     and every task sees the same span
@@ -32,7 +32,7 @@ from brax.envs.base import Env, State
 
 from discosyn_jax import checks
 
-SPAN_SEED = 26  # the issue's number; changing it plants another span in every run
+SPAN_SEED = 26  # fixed; changing it plants another span in every run
 ACTION_SIZE = 20
 MAX_TARGET = 0.9  # the largest action a target asks for
 

@@ -12,14 +12,14 @@ from typing import Callable
 
 import discosyn_jax  # sets XLA flags before jax is imported
 
-discosyn_jax.setup_jax()  # before brax (env.py) imports MJX
+discosyn_jax.setup_jax()  # before brax (discosyn_jax/env/hand_env.py) imports MJX
 
 from brax.envs.base import Env  # noqa: E402
 
-from discosyn_jax import hands  # noqa: E402
 from discosyn_jax.config import PHYSICS  # noqa: E402
-from discosyn_jax.env import HandEnv  # noqa: E402
-from discosyn_jax.task import Task, TaskConfig  # noqa: E402
+from discosyn_jax.env import hands  # noqa: E402
+from discosyn_jax.env.hand_env import HandEnv  # noqa: E402
+from discosyn_jax.env.task import Task, TaskConfig  # noqa: E402
 from tasks import dice, planted, screw, valve, valve_goal, weight_pull  # noqa: E402
 from tasks.sets import TASK_SETS  # noqa: E402
 
@@ -99,7 +99,7 @@ def register(name: str, task: type[Task], default_config=None, summary: str = ""
   """Add a task under `name` (its config class's defaults unless `default_config` is given);
   `tasks.make(name)` and `discosyn train --tasks NAME` then build it. Returns the name."""
   if not (isinstance(task, type) and issubclass(task, Task)):
-    raise ValueError(f"task {name!r}: {task!r} is not a Task class (discosyn_jax.task.Task)")
+    raise ValueError(f"task {name!r}: {task!r} is not a Task class (discosyn_jax.env.task.Task)")
   missing = sorted(getattr(task, "__abstractmethods__", ()))
   if missing:
     raise ValueError(f"task {name!r}: {task.__name__} does not define {', '.join(missing)}")
@@ -182,7 +182,7 @@ def make(name: str, *, backend: str = "auto", physics: str = "fast", hand: str =
          **overrides) -> Env:
   """The environment of task `name` on `backend` ("auto", "native" or "mjx"; a pure-JAX
   task has none and ignores it, as it ignores `hand`), with the physics profile `physics`
-  (config.PHYSICS) and `hand` (discosyn_jax.hands.load: a shipped hand or an MJCF file).
+  (config.PHYSICS) and `hand` (discosyn_jax.env.hands.load: a shipped hand or an MJCF file).
 
   `overrides` replace fields of the task's default config (e.g. frictionloss=0.2).
   """
@@ -222,6 +222,6 @@ def make_envs(config) -> list[Env]:
 
 def trainer(config, **kwargs):
   """A Trainer of `config` on its tasks' envs; `kwargs` go to Trainer (devices)."""
-  from discosyn_jax.train import Trainer
+  from discosyn_jax.training.train import Trainer
 
   return Trainer(config, make_envs(config), **kwargs)

@@ -24,8 +24,8 @@ import jax
 import jax.numpy as jnp
 import mujoco
 
-from discosyn_jax.physics import PhysicsView
-from discosyn_jax.task import Info, Task, TaskConfig
+from discosyn_jax.env.physics import PhysicsView
+from discosyn_jax.env.task import Info, Task, TaskConfig
 from tasks import common
 
 SHAPES = ("arms", "wheel")

@@ -22,8 +22,8 @@ import math
 import jax
 import jax.numpy as jnp
 
-from discosyn_jax.physics import PhysicsView
-from discosyn_jax.task import Info
+from discosyn_jax.env.physics import PhysicsView
+from discosyn_jax.env.task import Info
 from tasks import common, valve
 
 

@@ -30,8 +30,9 @@ if tuple(int(part) for part in metadata.version("jaxlib").split(".")[:2]) < (0, 
   _FAST_COMPILE.append("--xla_cpu_use_fusion_emitters=false")
 os.environ["XLA_FLAGS"] = " ".join([os.environ.get("XLA_FLAGS", ""), *_FAST_COMPILE]).strip()
 
-import discosyn_jax  # noqa: E402  (sets XLA flags before anything imports jax)
 import pytest  # noqa: E402
+
+import discosyn_jax  # noqa: E402  (sets XLA flags before anything imports jax)
 
 discosyn_jax.setup_jax()
 
@@ -98,7 +99,7 @@ def valve3_on_both_backends():
   import jax
   import jax.numpy as jnp
 
-  from discosyn_jax import scripted
+  from discosyn_jax.env import scripted
   from tests import helpers
 
   actions = jnp.asarray(scripted.grasp_and_sweep(50, 0.04))
@@ -119,7 +120,7 @@ def _a_cheap_physics_prior(monkeypatch):
   """Runs that start from the physics prior (the quickstart's default) make it from 4
   states per task here instead of 640 (test_physics_prior.py tests the prior itself; a
   training in a subprocess makes the whole one)."""
-  from discosyn_jax import physics_prior
+  from discosyn_jax.synergies import physics_prior
 
   monkeypatch.setattr(physics_prior, "ENVS", 2)
   monkeypatch.setattr(physics_prior, "EVERY", 50)

@@ -41,8 +41,8 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 from flax import struct  # noqa: E402
 
-from discosyn_jax import checkpoints  # noqa: E402
 from discosyn_jax.config import TrainConfig  # noqa: E402
+from discosyn_jax.run import checkpoints  # noqa: E402
 from tests.toy_env import ReachAction  # noqa: E402
 
 TOY = TrainConfig(tasks=("valve1",), n_synergies=2, policy_hidden=(8,), value_hidden=(8,),

@@ -11,7 +11,7 @@ from mujoco import mjx
 from tensorboardX.proto import event_pb2
 
 import tasks
-from discosyn_jax.rollouts import run_episode  # noqa: F401  (the tests' episodes)
+from discosyn_jax.env.rollouts import run_episode  # noqa: F401  (the tests' episodes)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # the checkout
 

@@ -8,9 +8,8 @@ import numpy as np
 import pytest
 
 import tasks
-
-from discosyn_jax import hands, physics
 from discosyn_jax.config import TrainConfig
+from discosyn_jax.env import hands, physics
 from tests import helpers
 
 
@@ -74,7 +73,7 @@ def test_native_and_mjx_trajectories_agree_on_valve3(valve3_on_both_backends):
 def test_the_mjx_implementation_is_chosen_by_name_and_checked(monkeypatch):
   import importlib.util
 
-  from discosyn_jax.physics import mjx_backend
+  from discosyn_jax.env.physics import mjx_backend
 
   monkeypatch.setenv("DISCOSYN_MJX_IMPL", "cuda")
   with pytest.raises(ValueError, match="unknown MJX implementation 'cuda'"):

@@ -4,7 +4,7 @@ import pathlib
 
 import jax
 
-from discosyn_jax import compile_cache
+from discosyn_jax.run import compile_cache
 
 
 def test_the_cache_folder_follows_the_environment(monkeypatch, tmp_path):

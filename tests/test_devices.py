@@ -8,7 +8,7 @@ import sys
 import jax
 import pytest
 
-from discosyn_jax import devices
+from discosyn_jax.training import devices
 from tests.helpers import ROOT
 
 

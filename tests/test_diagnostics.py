@@ -6,8 +6,9 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
-from discosyn_jax import diagnostics, networks
+from discosyn_jax.agent import networks
 from discosyn_jax.config import TrainConfig
+from discosyn_jax.synergies import diagnostics
 
 
 def model_and_params(decoder: str, seed: int = 0):

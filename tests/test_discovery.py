@@ -1,5 +1,5 @@
 """The measure of discovery (overlaps of synergy subspaces), the planted-synergy test bed,
-and the random-decoder controls of `discosyn experiment` (issue 26)."""
+and the random-decoder controls of `discosyn experiment`."""
 
 import json
 
@@ -10,11 +10,12 @@ import optax
 import pytest
 
 import tasks
-from discosyn_jax import checkpoints, diagnostics, discovery, ppo, synergies, train
-from experiments import report
+from discosyn_jax.agent import networks, ppo
 from discosyn_jax.config import TrainConfig
-from discosyn_jax.train import Trainer
-from experiments import paper, presets
+from discosyn_jax.run import checkpoints
+from discosyn_jax.synergies import diagnostics, discovery, fitting
+from discosyn_jax.training.train import Trainer
+from experiments import paper, presets, report
 from tasks import planted
 from tests.toy_env import ReachAction
 
@@ -129,7 +130,7 @@ def test_the_decoder_weight_decay_shrinks_the_decoder_weights_only():
   moved = [jax.tree_util.keystr(k) for k, v in jax.tree_util.tree_flatten_with_path(updates)[0]
            if np.abs(np.asarray(v)).max() > 0]
   assert moved == ["['params']['synergy_decoder']['synergies']['kernel']"]
-  assert synergies.method_name(config.replace(decoder_weight_decay=3.0)) == "DiscoSyn3-L-wd3"
+  assert fitting.method_name(config.replace(decoder_weight_decay=3.0)) == "DiscoSyn3-L-wd3"
   # a frozen decoder is not decayed: the optimiser state of a frozen run without decay
   frozen = config.replace(freeze_decoder=True)
   assert jax.tree.structure(ppo.optimizer(frozen).init(params)) == jax.tree.structure(
@@ -149,7 +150,7 @@ def test_the_initial_decoder_is_rebuilt_from_the_config_alone(decoder):
   config = TrainConfig(tasks=("a", "b"), n_synergies=3, decoder=decoder, seed=7,
                        decoder_hidden=(16, 16))
   from_trainer = make_trainer(config).initial_params()["params"]["synergy_decoder"]
-  rebuilt = train.random_decoder(config, 20)
+  rebuilt = networks.random_decoder(config, 20)
   jax.tree.map(np.testing.assert_array_equal, rebuilt, from_trainer)
   basis = discovery.initial_basis(config, 20)
   expected = diagnostics.synergy_basis(make_trainer(config).model,
@@ -164,7 +165,7 @@ def test_the_matched_decoder_has_the_learned_scale_in_the_initial_subspace():
              "log_std": np.full(20, -1.0, np.float32)}
   start = {"synergies": {"kernel": rng.normal(size=(3, 20)).astype(np.float32),
                          "bias": np.zeros(20, np.float32)}, "log_std": np.zeros(20, np.float32)}
-  matched = synergies.in_subspace_of(learned, start)
+  matched = fitting.in_subspace_of(learned, start)
   w, w0, wm = (d["synergies"]["kernel"].T for d in (learned, start, matched))
   assert float(diagnostics.overlap(wm, w0)) == pytest.approx(1.0, abs=1e-5)
   np.testing.assert_allclose(np.linalg.svd(wm, compute_uv=False),
@@ -191,7 +192,7 @@ def test_the_controls_build_run_and_show_in_the_report(tmp_path):
   # the matched control ran the learned decoder's scale and bias in the random start's subspace
   read = lambda m: checkpoints.read_arrays(folder(m) / "final", DECODER)
   learned, used = read("DiscoSyn3-L"), read("Random3-L-matched")
-  start = train.random_decoder(random, 20)["synergies"]["kernel"]
+  start = networks.random_decoder(random, 20)["synergies"]["kernel"]
   np.testing.assert_allclose(used["synergies.bias"], learned["synergies.bias"], atol=1e-6)
   assert float(diagnostics.overlap(used["synergies.kernel"].T, start.T)) == pytest.approx(1, abs=1e-5)
   np.testing.assert_allclose(np.linalg.svd(used["synergies.kernel"], compute_uv=False),
@@ -220,7 +221,7 @@ def test_an_annealed_decay_falls_linearly_to_nothing_over_its_train_steps():
     shrink.append(float(np.mean(kernel(updates) / kernel(params))) / -config.learning_rate)
   np.testing.assert_allclose(shrink[:12], 2.0 * (1 - np.arange(12) / 12), atol=1e-5)
   assert shrink[12:] == [0.0, 0.0]  # off after its 3 train steps
-  assert synergies.method_name(config) == "DiscoSyn3-L-wd2a3"
+  assert fitting.method_name(config) == "DiscoSyn3-L-wd2a3"
 
 
 def test_the_decayed_variant_is_planned_beside_the_papers_update_with_its_own_matched_control(tmp_path):

@@ -11,11 +11,13 @@ import pytest
 from sklearn.decomposition import PCA
 
 from discosyn import cli, commands
-from discosyn_jax import checkpoints, logs, loop, networks, run_folder, synergies
-from experiments import report, report_runs
+from discosyn_jax.agent import networks
 from discosyn_jax.config import TrainConfig
-from discosyn_jax.train import Trainer, _episode_metrics
-from experiments import paper, presets
+from discosyn_jax.run import checkpoints, logs, reading
+from discosyn_jax.synergies import fitting
+from discosyn_jax.training import loop
+from discosyn_jax.training.train import Trainer, _episode_metrics
+from experiments import paper, presets, report, report_runs
 from tests import reference
 from tests.toy_env import ReachAction
 
@@ -63,28 +65,28 @@ def low_rank_actions(n=600, rank=3, seed=0):
 def test_pca_decoder_explains_its_eigenvalue_fractions():
   actions = low_rank_actions()
   for k in (1, 3, 6):
-    params, ev = synergies.fit_pca(actions, k)
+    params, ev = fitting.fit_pca(actions, k)
     pca = PCA(k).fit(actions)
     assert ev == pytest.approx(pca.explained_variance_ratio_.sum(), abs=1e-6)
     # the decoder reconstructs the data from unit-scale scores exactly as PCA does
     scores = pca.transform(actions) / np.sqrt(pca.explained_variance_)
     fields = dict(decoder="linear", n_synergies=k, decoder_bias=True, decoder_hidden=(128, 128))
-    rebuilt = synergies.decode(fields, params, scores)
-    assert synergies.explained_variance(actions, rebuilt) == pytest.approx(ev, abs=1e-5)
-  assert synergies.fit_pca(actions, 3)[1] > 0.95  # the data has rank 3 plus a little noise
+    rebuilt = fitting.decode(fields, params, scores)
+    assert fitting.explained_variance(actions, rebuilt) == pytest.approx(ev, abs=1e-5)
+  assert fitting.fit_pca(actions, 3)[1] > 0.95  # the data has rank 3 plus a little noise
 
 
 def test_autoencoder_code_is_standardised_into_the_decoder():
   actions = low_rank_actions(n=400)
-  params, ev = synergies.fit_autoencoder(actions, 3, hidden=(32, 32), steps=400)
+  params, ev = fitting.fit_autoencoder(actions, 3, hidden=(32, 32), steps=400)
   assert 0.5 < ev <= 1.0
   fields = dict(decoder="mlp", n_synergies=3, decoder_bias=True, decoder_hidden=(32, 32))
   # z = 0 decodes near the mean posture: the code was centred before folding
-  centre = synergies.decode(fields, params, np.zeros((1, 3)))[0]
+  centre = fitting.decode(fields, params, np.zeros((1, 3)))[0]
   spread = np.abs(actions - actions.mean(0)).mean()
   assert np.abs(centre - actions.mean(0)).mean() < spread
   with pytest.raises(ValueError, match="cannot fit 30 synergies"):
-    synergies.fit_autoencoder(actions, 30)
+    fitting.fit_autoencoder(actions, 30)
 
 
 def test_folding_the_code_standardisation_into_the_decoder_is_exact():
@@ -95,28 +97,28 @@ def test_folding_the_code_standardisation_into_the_decoder_is_exact():
   params = jax.tree.map(lambda s: rng.normal(size=s.shape).astype(np.float32), shapes)
   mean, std = rng.normal(size=3), rng.uniform(0.2, 3.0, size=3)
   z = rng.normal(size=(50, 3))
-  folded = reference.as_numpy(synergies.standardised_input(params, mean, std))
+  folded = reference.as_numpy(fitting.standardised_input(params, mean, std))
   np.testing.assert_allclose(reference.gaussian_head(folded, z)[0],
                              reference.gaussian_head(reference.as_numpy(params), mean + std * z)[0],
                              rtol=1e-5, atol=1e-4)
 
 
 def test_synergy_file_round_trip_and_mismatch(tmp_path):
-  params, ev = synergies.fit_pca(low_rank_actions(), 4)
+  params, ev = fitting.fit_pca(low_rank_actions(), 4)
   fields = dict(decoder="linear", n_synergies=4, decoder_bias=True, decoder_hidden=(128, 128))
-  path = synergies.save(tmp_path / "pca4.npz", params, fields, method="PCA", explained_variance=ev)
-  meta, loaded = synergies.read(path)
+  path = fitting.save(tmp_path / "pca4.npz", params, fields, method="PCA", explained_variance=ev)
+  meta, loaded = fitting.read(path)
   assert meta["method"] == "PCA" and meta["explained_variance"] == pytest.approx(ev)
   np.testing.assert_array_equal(loaded["synergies"]["kernel"], params["synergies"]["kernel"])
   config = TrainConfig(tasks=("a",), n_synergies=4, decoder_from=str(path), freeze_decoder=True)
-  assert synergies.load_decoder(path, config)["log_std"].shape == (20,)
+  assert fitting.load_decoder(path, config)["log_std"].shape == (20,)
   with pytest.raises(ValueError, match="n_synergies = 4, the config asks for 3"):
-    synergies.load_decoder(path, config.replace(n_synergies=3))
+    fitting.load_decoder(path, config.replace(n_synergies=3))
   (tmp_path / "bad.npz").write_text("not a zip")
   with pytest.raises(ValueError, match="not a synergy file"):
-    synergies.read(tmp_path / "bad.npz")
+    fitting.read(tmp_path / "bad.npz")
   with pytest.raises(ValueError, match="does not exist"):
-    synergies.read(tmp_path / "missing.npz")
+    fitting.read(tmp_path / "missing.npz")
 
 
 def test_first_reward_step_is_logged():
@@ -159,7 +161,7 @@ def test_baselines_collect_fit_and_train_in_frozen_spaces(experiments):
     config = json.loads((run_dir / "config.json").read_text())
     assert config["freeze_decoder"] and not config["decoder_noise"] and config["n_synergies"] == k
     assert (run_dir / "final").is_dir()
-    _, source = synergies.read(fit / f"{method.lower()}{k}.npz")
+    _, source = fitting.read(fit / f"{method.lower()}{k}.npz")
     trained = final_decoder(run_dir)
     for name, value in jax.tree_util.tree_flatten_with_path(source)[0]:
       dotted = ".".join(str(p.key) for p in name)
@@ -186,10 +188,10 @@ def test_the_random_decoder_control_keeps_the_learned_runs_initial_decoder(exper
   control = experiments / "sparse-random-seed0"
   meta = json.loads((control / "experiment.json").read_text())
   assert meta["method"] == "Random3-L" and meta["experiment"] == "sparse"
-  config = run_folder.load_run(control)[0]
-  frozen = run_folder.load_run(experiments / "sparse-synergies-seed0")[0]
+  config = reading.load_run(control)[0]
+  frozen = reading.load_run(experiments / "sparse-synergies-seed0")[0]
   assert config == frozen.replace(decoder_from="")  # only the decoder's source differs
-  learned = run_folder.load_run(experiments / "discosyn3-l-set1-seed0")[0]
+  learned = reading.load_run(experiments / "discosyn3-l-set1-seed0")[0]
   start = make_trainer(learned).initial_params()["params"]["synergy_decoder"]
   trained = final_decoder(control)
   np.testing.assert_array_equal(trained["synergies.kernel"], start["synergies"]["kernel"])
@@ -197,7 +199,7 @@ def test_the_random_decoder_control_keeps_the_learned_runs_initial_decoder(exper
   # tests/test_discovery.py)
   steps = [s for s in paper.Planner(experiments, "ci", 0, SETS).plan("discosyn-set1")
            if s.meta["method"].endswith(("-L", "-NL"))]
-  names = [s.config and synergies.method_name(s.config) for s in steps]
+  names = [s.config and fitting.method_name(s.config) for s in steps]
   assert names == ["DiscoSyn3-L", "Random3-L", "DiscoSyn3-NL", "Random3-NL", "DiscoSyn4-L",
                    "Random4-L", "DiscoSyn4-NL", "Random4-NL"]
   assert all(s.config.replace(freeze_decoder=False) == r.config
@@ -276,9 +278,9 @@ def test_report_mean_and_spread_over_seeds(tmp_path):
 
 
 def test_train_flag_decoder_from_sets_a_frozen_space(tmp_path):
-  params, ev = synergies.fit_pca(low_rank_actions(), 4)
+  params, ev = fitting.fit_pca(low_rank_actions(), 4)
   fields = dict(decoder="linear", n_synergies=4, decoder_bias=True, decoder_hidden=(128, 128))
-  path = synergies.save(tmp_path / "pca4.npz", params, fields, method="PCA", explained_variance=ev)
+  path = fitting.save(tmp_path / "pca4.npz", params, fields, method="PCA", explained_variance=ev)
   args = cli.build_parser().parse_args(["train", "--tasks", "valve_goal", "--decoder-from", str(path)])
   config = commands.train_config(args)
   assert (config.decoder, config.n_synergies, config.freeze_decoder) == ("linear", 4, True)
@@ -291,15 +293,15 @@ def test_train_flag_decoder_from_sets_a_frozen_space(tmp_path):
 
 def test_a_frozen_run_resumes_without_its_decoder_source(experiments, tmp_path):
   # the checkpoint holds the decoder: a moved or deleted source does not stop a resume
-  _, params = synergies.read(experiments / "synergies-set1-seed0" / "pca4.npz")
+  _, params = fitting.read(experiments / "synergies-set1-seed0" / "pca4.npz")
   fields = dict(decoder="linear", n_synergies=4, decoder_bias=True, decoder_hidden=(128, 128))
-  source = synergies.save(tmp_path / "pca4.npz", params, fields, method="PCA")
+  source = fitting.save(tmp_path / "pca4.npz", params, fields, method="PCA")
   config = TrainConfig(tasks=("a",), **{**paper.SCALES["ci"].train, "steps": 1},
-                       **synergies.frozen_fields(synergies.read(source)[0], source))
+                       **fitting.frozen_fields(fitting.read(source)[0], source))
   loop.train(config, tmp_path / "run", make_trainer=make_trainer, progress=False, log=lambda *a: None)
   source.unlink()
   with pytest.raises(ValueError, match="does not exist"):
-    synergies.starting_decoder(config)
+    fitting.starting_decoder(config)
   out = loop.train(config.replace(steps=2), tmp_path / "run", resume=True, progress=False,
                    make_trainer=make_trainer, log=lambda *a: None)
   assert int(out["state"].step) == 2

@@ -31,10 +31,13 @@ import pytest
 import tasks
 import tasks.registry
 from discosyn import cli
-from discosyn_jax import atomic, checkpoints, layout, logs, loop, run_folder, videos
-from experiments import report_runs
+from discosyn_jax import atomic
 from discosyn_jax import config as config_lib
-from discosyn_jax.train import Trainer
+from discosyn_jax.run import checkpoints, layout, logs, reading
+from discosyn_jax.training import loop
+from discosyn_jax.training.train import Trainer
+from discosyn_jax.viz import videos
+from experiments import report_runs
 from tests.fault_worker import TOY, small_state, toy_envs
 from tests.helpers import tensorboard_scalars
 
@@ -484,7 +487,7 @@ def test_a_run_has_one_writer_readers_see_a_consistent_checkpoint_and_a_dead_wri
   assert (run_dir / "config.json").read_bytes() == before["config.json"]
   for _ in range(40):  # readers: never a damaged or vanished checkpoint, and one line
     warnings = []
-    run_folder.read_run(run_dir, checkpoints.verify, warn=warnings.append)
+    reading.read_run(run_dir, checkpoints.verify, warn=warnings.append)
     assert len(warnings) == 1 and warnings[0].startswith(holder), warnings
   assert cli.main(["eval", str(run_dir)]) == 0
   (line,) = capsys.readouterr().err.splitlines()
@@ -784,12 +787,12 @@ def test_a_config_file_missing_a_field_is_named_never_filled_in(unbroken, tmp_pa
     ("wrong shape", "synergies.kernel is (3, 20) there, (2, 20) for that decoder"),
 ])
 def test_a_malformed_decoder_file_is_refused_in_one_line(tmp_path, capsys, toy_tasks, how, fragment):
-  from discosyn_jax import synergies
+  from discosyn_jax.synergies import fitting
 
   path = tmp_path / "decoder.npz"
   params = {"synergies": {"kernel": np.zeros((2, 20)), "bias": np.zeros(20)},
             "log_std": np.zeros(20)}
-  synergies.save(path, params, TOY.to_dict())
+  fitting.save(path, params, TOY.to_dict())
   with np.load(path) as data:
     arrays = dict(data)
   meta = json.loads(str(arrays["meta"]))
@@ -852,7 +855,8 @@ def test_a_batch_of_actions_to_one_env_is_a_clear_error():
 
 
 def test_render_flags_are_checked_before_the_rollout(tmp_path, capsys, monkeypatch):
-  from tests.test_pictures_videos import TINY, saved_run as make_saved_run
+  from tests.test_pictures_videos import TINY
+  from tests.test_pictures_videos import saved_run as make_saved_run
 
   run_dir = tmp_path / "run"
   make_saved_run(run_dir, TINY)

@@ -4,7 +4,7 @@ the definition written out in NumPy (tests/reference.py)."""
 import numpy as np
 
 from discosyn_jax.config import TrainConfig
-from discosyn_jax.train import gae
+from discosyn_jax.training.train import gae
 from tests import reference
 
 

@@ -5,7 +5,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from discosyn_jax import assets
+from discosyn_jax.env import assets
 
 JOINTS = (
     "WRJ1", "WRJ0",

@@ -1,4 +1,4 @@
-"""Any MJCF hand (discosyn_jax/hands.py): the shipped hands run the valves on both backends,
+"""Any MJCF hand (discosyn_jax/env/hands.py): the shipped hands run the valves on both backends,
 every hand's palm lands where ours does, our hand's scenes are the very models of before,
 a hand file of one's own (meshes beside it) works from its own folder, and a file that is
 no hand is refused in one line."""
@@ -13,7 +13,9 @@ import pytest
 
 import tasks
 from discosyn import cli
-from discosyn_jax import assets, config as config_lib, hands, layout, scene, scripted
+from discosyn_jax import config as config_lib
+from discosyn_jax.env import assets, hands, scene, scripted
+from discosyn_jax.run import layout
 from tests import helpers
 from tests.helpers import run_episode
 

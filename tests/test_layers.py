@@ -78,6 +78,27 @@ def test_no_module_imports_itself_back():
 
 def test_the_walk_sees_the_imports_it_judges():
   edges = graph()  # the walk itself: a test that finds no import could never fail
-  assert "discosyn_jax.checkpoints" in edges["discosyn_jax.loop"]
-  assert "discosyn_jax.train" in edges["tasks.registry"]  # inside a function
+  assert "discosyn_jax.run.checkpoints" in edges["discosyn_jax.training.loop"]
+  assert "discosyn_jax.training.train" in edges["tasks.registry"]  # inside a function
   assert "tasks" in edges["experiments.presets"]
+
+
+# the library's parts (docs/ARCHITECTURE.md), each importing only parts of a lower rank; at
+# the top level of discosyn_jax, the modules every part may use
+PART_RANK = {"training": 3, "synergies": 2, "viz": 2, "agent": 1, "env": 1, "run": 1,
+             "config": 0.5, "checks": 0, "atomic": 0}
+
+
+def part(module: str) -> str | None:
+  """The part of the library that holds `module` (None: the package's own __init__)."""
+  parts = module.split(".")
+  return parts[1] if parts[0] == "discosyn_jax" and len(parts) > 1 else None
+
+
+def test_the_library_is_its_parts_each_importing_only_the_parts_below_it():
+  library = {name: targets for name, targets in graph().items() if part(name)}
+  assert set(map(part, library)) == set(PART_RANK), "a part ARCHITECTURE.md does not name"
+  wrong = [f"{name} imports {target}" for name, targets in library.items() for target in targets
+           if part(target) and part(target) != part(name)
+           and PART_RANK[part(target)] >= PART_RANK[part(name)]]
+  assert not wrong, "\n".join(sorted(wrong))

@@ -6,9 +6,11 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from discosyn_jax import layout, logs, loop, plots
 from discosyn_jax.config import TrainConfig
-from discosyn_jax.train import Trainer
+from discosyn_jax.run import layout, logs
+from discosyn_jax.training import loop
+from discosyn_jax.training.train import Trainer
+from discosyn_jax.viz import plots
 from tests.helpers import tensorboard_scalars
 from tests.toy_env import ReachAction
 

@@ -11,7 +11,7 @@ import tasks
 import tasks.registry as registry
 from discosyn import cli
 from discosyn_jax import config as config_lib
-from discosyn_jax import layout
+from discosyn_jax.run import layout
 
 EXAMPLE = pathlib.Path(__file__).resolve().parents[1] / "docs" / "examples" / "knob"
 TINY = ["--num-envs", "2", "--unroll-length", "4", "--minibatches", "2", "--epochs", "1",

@@ -1,4 +1,4 @@
-"""The physics prior (discosyn_jax/physics_prior.py): the action directions that move the
+"""The physics prior (discosyn_jax/synergies/physics_prior.py): the action directions that move the
 objects most, the same for every seed; each seed's decoder starts in that subspace with its
 own scale and bias."""
 
@@ -7,7 +7,9 @@ import pytest
 
 import tasks
 from discosyn_jax import config as config_lib
-from discosyn_jax import diagnostics, loop, physics_prior, synergies, train
+from discosyn_jax.agent import networks
+from discosyn_jax.synergies import diagnostics, fitting, physics_prior
+from discosyn_jax.training import loop
 from experiments import presets
 
 TINY = dict(num_envs=2, unroll_length=4, num_minibatches=2, update_epochs=1, steps=1,
@@ -44,7 +46,7 @@ def test_a_start_keeps_the_seeds_own_scale_and_bias_in_the_prior_subspace(valve3
   basis = physics_prior.basis([valve3], 3)
   config = presets.preset("set1-disco3-linear")
   for seed in (0, 1):
-    own = train.random_decoder(config.replace(seed=seed), 20)
+    own = networks.random_decoder(config.replace(seed=seed), 20)
     start = physics_prior.start(own, basis)
     kernel, own_kernel = start["synergies"]["kernel"], np.asarray(own["synergies"]["kernel"])
     assert diagnostics.overlap(kernel.T, basis) == pytest.approx(1.0, abs=1e-5)
@@ -59,18 +61,18 @@ def test_every_seed_of_a_run_starts_in_the_same_subspace_and_only_there():
     config = presets.preset("set1-disco3-linear").replace(
         tasks=("valve3",), seed=seed, **TINY).validate()
     trainer = tasks.trainer(config)
-    starts.append(synergies.basis(synergies.architecture(config.to_dict()),
+    starts.append(fitting.basis(fitting.architecture(config.to_dict()),
                                   loop.starting_decoder(trainer)))
-    random_start = synergies.basis(synergies.architecture(config.to_dict()),
-                                   train.random_decoder(config, 20))
+    random_start = fitting.basis(fitting.architecture(config.to_dict()),
+                                   networks.random_decoder(config, 20))
   assert diagnostics.overlap(*starts) == pytest.approx(1.0, abs=1e-5)
   assert diagnostics.overlap(starts[1], random_start) < 0.9  # not the seed's own subspace
 
 
 def test_the_prior_is_refused_where_it_cannot_start_the_decoder():
   config = presets.preset("set1-disco3-linear")
-  assert synergies.method_name(config) == "DiscoSyn3-L-prior"
-  assert synergies.method_name(config.replace(freeze_decoder=True)) == "Prior3-L"
+  assert fitting.method_name(config) == "DiscoSyn3-L-prior"
+  assert fitting.method_name(config.replace(freeze_decoder=True)) == "Prior3-L"
   for bad in (dict(decoder="mlp"), dict(decoder_from="x.npz"), dict(decoder_init="pca")):
     with pytest.raises(ValueError):
       config.replace(**bad).validate()
@@ -84,3 +86,71 @@ def test_chunking_the_pushes_changes_nothing(valve3, monkeypatch):
   whole = physics_prior.object_jacobians(valve3)
   monkeypatch.setattr(physics_prior, "CHUNK", 3)
   np.testing.assert_allclose(physics_prior.object_jacobians(valve3), whole, atol=1e-6)
+
+
+_PLANTED = """<mujoco><worldbody>
+  <body name="hand/finger"><joint name="hand/a0" type="slide"/><joint name="hand/a1" type="slide"
+    axis="0 1 0"/><geom size="0.01"/></body>
+  <body name="rewarded"><joint name="rewarded" type="slide"/><geom size="0.01"/></body>
+  <body name="flung"><joint name="flung" type="slide"/><geom size="0.01"/></body>
+</worldbody></mujoco>"""
+
+
+class PlantedResponse:
+  """A hand of two actions and two objects, stepped in pure JAX: action 0 moves the object the
+  task rewards (gain 1), action 1 flings the other, unrewarded, three times as hard. The
+  pooled object motion favours action 1; the task asks for action 0."""
+
+  action_size, episode_length = 2, 10
+
+  def __init__(self):
+    import jax.numpy as jnp
+    import mujoco
+    from brax.envs.base import State
+
+    from discosyn_jax.env.physics import PhysicsView
+
+    self.mj_model = mujoco.MjModel.from_xml_string(_PLANTED)
+    self._jnp, self._state, self._view = jnp, State, PhysicsView
+    self.physics = self
+
+  def view(self, qvel):
+    return self._view(qpos=qvel, qvel=qvel, sensordata=self._jnp.zeros(0))
+
+  def reset(self, key):
+    zero = self._jnp.zeros(())
+    return self._state(pipeline_state=self._jnp.zeros(4), obs=self._jnp.zeros(1), reward=zero,
+                       done=zero, metrics={})
+
+  def step(self, state, action):
+    qvel = self._jnp.stack([action[0], action[1], action[0], 3.0 * action[1]])
+    return state.replace(pipeline_state=qvel, reward=qvel[2])
+
+
+def test_the_task_aware_prior_keeps_the_rewarded_direction_the_object_motion_prior_loses():
+  env = PlantedResponse()
+  objects, reward = (physics_prior.basis([env], 1, response) for response in ("objects", "reward"))
+  assert abs(objects[1, 0]) == pytest.approx(1.0, abs=1e-5)  # the flung object's action
+  assert abs(reward[0, 0]) == pytest.approx(1.0, abs=1e-5)  # the task's own
+  assert physics_prior.captured(reward, physics_prior.metric(env, "reward")) == pytest.approx(1.0)
+  assert physics_prior.captured(objects, physics_prior.metric(env, "reward")) == pytest.approx(
+      0.0, abs=1e-6)
+  with pytest.raises(ValueError, match="response must be one of objects, reward"):
+    physics_prior.basis([env], 1, "velocity")
+
+
+def test_sharing_gives_each_task_its_direction_where_the_pooled_sum_does_not():
+  """Task 0 spreads its response over actions 0-2, tasks 1 and 2 concentrate theirs on
+  actions 3 and 4: the sum's top two are those, and task 0 gets nothing; in turns, task 0
+  gets one of its directions, and the directions stay orthonormal."""
+  m0 = np.diag([1 / 3, 1 / 3, 1 / 3, 0.0, 0.0])
+  m1 = np.diag([0.0, 0.0, 0.0, 0.6, 0.4])
+  m2 = np.diag([0.0, 0.0, 0.0, 0.4, 0.6])
+  pooled = physics_prior.pool([m0, m1, m2], 2, "trace")
+  shared = physics_prior.pool([m0, m1, m2], 2, "share")
+  assert physics_prior.captured(pooled, m0) == pytest.approx(0.0, abs=1e-9)
+  assert physics_prior.captured(shared, m0) == pytest.approx(1 / 3)
+  assert physics_prior.captured(shared, m1) == pytest.approx(0.6)
+  np.testing.assert_allclose(shared.T @ shared, np.eye(2), atol=1e-9)
+  with pytest.raises(ValueError, match="pooling must be one of trace, share"):
+    physics_prior.pool([m0], 1, "max")

@@ -6,12 +6,13 @@ import pytest
 from PIL import Image
 
 import tasks
-
 from discosyn import cli
-from discosyn_jax import checkpoints, hands, layout, synergy_pictures, videos
 from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
-from discosyn_jax.train import Trainer
+from discosyn_jax.env import hands
+from discosyn_jax.run import checkpoints, layout
+from discosyn_jax.training.train import Trainer
+from discosyn_jax.viz import synergy_pictures, videos
 
 # imageio reads a video back through an ffmpeg subprocess; JAX warns about any fork, here
 # harmlessly (exec follows). videos.write_video silences it for its own writer.

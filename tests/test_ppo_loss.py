@@ -10,7 +10,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from discosyn_jax import networks, policy, ppo
+from discosyn_jax.agent import networks, policy, ppo
 from discosyn_jax.config import TrainConfig
 from tests import reference
 

@@ -1,6 +1,6 @@
 """A Ctrl-C or SIGTERM that lands inside a garbage-collector callback (JAX registers one,
 where Python would print the exception and drop it) is parked and raised by the training
-loop's next step (discosyn_jax/stop.py); anywhere else it stops the command at once, and
+loop's next step (discosyn_jax/run/stop.py); anywhere else it stops the command at once, and
 whatever error it causes (a jitted computation it aborted from inside a host callback) is
 taken for it; a second signal while it is under way is ignored. (tests/test_faults.py
 lands them inside the physics callback of a real run.)"""
@@ -13,7 +13,7 @@ import sys
 import pytest
 
 from discosyn import cli
-from discosyn_jax import stop
+from discosyn_jax.run import stop
 
 
 @pytest.fixture(autouse=True)

@@ -11,10 +11,12 @@ from flax import struct
 
 import tasks
 from discosyn import cli
-from discosyn_jax import checkpoints, loop, run_folder, runs, wrappers
 from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
-from discosyn_jax.train import Trainer
+from discosyn_jax.env import wrappers
+from discosyn_jax.run import checkpoints, owner, reading
+from discosyn_jax.training import loop
+from discosyn_jax.training.train import Trainer
 from tests.toy_env import ReachAction
 
 TINY = dict(n_synergies=2, policy_hidden=(16, 16), value_hidden=(16, 16),
@@ -154,13 +156,13 @@ def test_force_replaces_the_run_and_only_it(tmp_path):
   beside.write_text("kept")
   old, new = TrainConfig(**TINY, steps=4), TrainConfig(**TINY, steps=9)
   run_dir.mkdir()
-  config_lib.save(run_folder.run_config(run_dir, old, resume=False, force=False), run_dir / "config.json")
+  config_lib.save(reading.run_config(run_dir, old, resume=False, force=False), run_dir / "config.json")
   (run_dir / "metrics.jsonl").write_text("{}\n")
   (run_dir / "checkpoints" / "2").mkdir(parents=True)
   with pytest.raises(ValueError, match="already holds a run"):
-    run_folder.run_config(run_dir, new, resume=False, force=False)
-  assert run_folder.run_config(run_dir, new, resume=False, force=True) == new
-  with runs.Writer(run_dir) as writer:  # the old run is set aside until the new one has a checkpoint
+    reading.run_config(run_dir, new, resume=False, force=False)
+  assert reading.run_config(run_dir, new, resume=False, force=True) == new
+  with owner.Writer(run_dir) as writer:  # the old run is set aside until the new one has a checkpoint
     writer.begin(lambda: config_lib.save(new, run_dir / "config.json"), replace=True)
     assert sorted(p.name for p in run_dir.iterdir()) == ["config.json", "replaced", "writer.lock"]
     writer.keep()
@@ -169,7 +171,7 @@ def test_force_replaces_the_run_and_only_it(tmp_path):
   assert beside.read_text() == "kept"
   # a folder that holds something else than a run is never deleted, --force or not
   with pytest.raises(ValueError, match="holds no run"):
-    run_folder.run_config(tmp_path, new, resume=False, force=True)
+    reading.run_config(tmp_path, new, resume=False, force=True)
   assert beside.read_text() == "kept"
 
 

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import tasks
-from discosyn_jax import hands, scripted
-from discosyn_jax.physics.native import deepest_penetration
+from discosyn_jax.env import hands, scripted
+from discosyn_jax.env.physics.native import deepest_penetration
 from tests import helpers
 from tests.helpers import run_episode, uniform_policy
 

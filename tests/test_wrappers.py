@@ -5,7 +5,7 @@ import jax.numpy as jnp
 import numpy as np
 from brax.envs.wrappers.training import EpisodeWrapper, VmapWrapper
 
-from discosyn_jax import wrappers
+from discosyn_jax.env import wrappers
 from tests.toy_env import StopOnSignal
 
 

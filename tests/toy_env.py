@@ -80,7 +80,7 @@ class PhysicsReach(ReachAction):
   def __init__(self, target, **kwargs):
     import mujoco
 
-    from discosyn_jax.physics.native import NativeBackend
+    from discosyn_jax.env.physics.native import NativeBackend
 
     super().__init__(target, **kwargs)
     self.mj_model = mujoco.MjModel.from_xml_string(_SLIDER)

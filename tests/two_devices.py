@@ -13,9 +13,9 @@ import json
 import jax
 import numpy as np
 
-from discosyn_jax.config import TrainConfig
 import tasks
-from discosyn_jax.train import Trainer
+from discosyn_jax.config import TrainConfig
+from discosyn_jax.training.train import Trainer
 from tests.test_trainer import two_task_trainer
 
 

@@ -13,7 +13,7 @@ import pathlib
 
 import jax.numpy as jnp
 
-from discosyn_jax.task import Task, TaskConfig
+from discosyn_jax.env.task import Task, TaskConfig
 from tasks import common
 
 

@@ -1,5 +1,5 @@
 #!/bin/bash
-# Issue 27, 2026-12-02: learning per env step before (reference physics, 4 ms x 10) and after
+# 2026-12-02: learning per env step before (reference physics, 4 ms x 10) and after
 # (the fast profile's valves: 8 ms x 5, refsafe off), 2 seeds each, on one 2-core VM.
 # Each side ran from a copy of HEAD 45e6940 (the "after" copy with xml/arena.xml's timestep
 # 0.008 + refsafe="disable" and TaskConfig.n_substeps 5: exactly the fast profile of set #1),

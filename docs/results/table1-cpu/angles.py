@@ -1,12 +1,18 @@
 # The exact script of the 2026-11-30 subspace comparison in docs/TRAINING_NOTES.md.
 """Principal-angle cosines between synergy subspaces: learned vs random start vs PCA of PPO's actions."""
-import sys, pathlib, itertools, numpy as np
+import itertools
+import pathlib
+import sys
+
+import numpy as np
+
 sys.path.insert(0, "/work/main")
-from discosyn_jax import synergies
-from discosyn_jax.diagnostics import principal_cosines
+from discosyn_jax.synergies import fitting
+from discosyn_jax.synergies.diagnostics import principal_cosines
+
 O = pathlib.Path(sys.argv[1]); seeds = [int(s) for s in sys.argv[2:]]
 def basis(path):
-    meta, p = synergies.read(path)
+    meta, p = fitting.read(path)
     return np.asarray(p["synergies"]["kernel"]).T  # (20, k)
 cos = lambda a, b: np.asarray(principal_cosines(a, b))
 fmt = lambda c: " / ".join(f"{x:.2f}" for x in c)

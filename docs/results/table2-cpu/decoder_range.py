@@ -1,7 +1,11 @@
 # The exact script of the 2026-12-01 measurement in docs/TRAINING_NOTES.md ("Why Random-NL is so weak"):
 # the spread of actions a randomly initialised linear / MLP decoder gives over bounded z.
-import jax, jax.numpy as jnp, numpy as np
-from discosyn_jax.networks import DiscoSyn
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from discosyn_jax.agent.networks import DiscoSyn
+
 for kind in ("linear", "mlp"):
   for b in (3, 4):
     net = DiscoSyn(obs_sizes=(8,), n_synergies=b, decoder=kind, squash_z=True)

@@ -1,0 +1,191 @@
+"""The one Flax module: per-task policy and value heads, the shared synergy decoder, and
+the discriminator.
+
+  pi(z | s, n) = N(mu_n(s), sigma_n)        a head per task (observation sizes differ)
+  V_n(s)                                     a value head per task
+  p(a | z)     = N(D(z), sigma_phi)          shared by all tasks; D linear (b x 20) or an MLP;
+                                             its mean D(z) is the action at evaluation
+  q(z | a)     = N(m(a), sigma_psi)          the discriminator
+
+All standard deviations are learned and state-independent. The identity decoder (full-action
+PPO) has no parameters and no noise: a = z. With `decoder_noise` off the decoder acts with
+its mean during training too (the sequential baselines' fixed PCA / autoencoder spaces).
+
+The discriminator reads the action only, as in the paper's Eq. 1. The entropy bound
+H[pi(a|s,n)] >= H[pi(z|s,n)] + H[p(a|z)] + E log q(z|.) holds for any q; conditioning q on
+(a, s, n) would tighten it, but would also let q tell the z's apart by the state and task
+instead of by the posture, taking away the pressure on the shared decoder to give each z a
+posture of its own. One q over all tasks keeps that pressure, and needs no per-task inputs.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+import flax.linen as nn
+import jax
+import jax.numpy as jnp
+
+from discosyn_jax.config import TrainConfig
+
+LOG_2PI = math.log(2 * math.pi)
+
+
+def gaussian_log_prob(x: jax.Array, mean: jax.Array, log_std: jax.Array) -> jax.Array:
+  """log N(x; mean, exp(log_std)^2), summed over the last axis."""
+  z = (x - mean) * jnp.exp(-log_std)
+  return jnp.sum(-0.5 * z * z - log_std - 0.5 * LOG_2PI, axis=-1)
+
+
+def gaussian_entropy(log_std: jax.Array) -> jax.Array:
+  return jnp.sum(log_std + 0.5 * (1.0 + LOG_2PI), axis=-1)
+
+
+class MLP(nn.Module):
+  hidden: Sequence[int]
+  out: int
+  out_scale: float = 1.0  # a small last layer starts the output near zero
+
+  @nn.compact
+  def __call__(self, x):
+    for width in self.hidden:
+      x = nn.swish(nn.Dense(width)(x))
+    return nn.Dense(self.out, kernel_init=nn.initializers.variance_scaling(
+        self.out_scale, "fan_in", "truncated_normal"))(x)
+
+
+class GaussianHead(nn.Module):
+  """An MLP mean and a learned state-independent log std."""
+  hidden: Sequence[int]
+  out: int
+  init_std: float
+  out_scale: float = 0.01
+
+  @nn.compact
+  def __call__(self, x):
+    mean = MLP(self.hidden, self.out, self.out_scale)(x)
+    log_std = self.param("log_std", nn.initializers.constant(math.log(self.init_std)), (self.out,))
+    return mean, jnp.broadcast_to(log_std, mean.shape)
+
+
+class LinearDecoder(nn.Module):
+  """a = W z (+ c): the columns of W are the synergies."""
+  out: int
+  bias: bool
+  init_std: float
+
+  @nn.compact
+  def __call__(self, z):
+    mean = nn.Dense(self.out, use_bias=self.bias, name="synergies")(z)
+    log_std = self.param("log_std", nn.initializers.constant(math.log(self.init_std)), (self.out,))
+    return mean, jnp.broadcast_to(log_std, mean.shape)
+
+
+class DiscoSyn(nn.Module):
+  obs_sizes: tuple[int, ...]  # one per task
+  n_synergies: int
+  action_size: int = 20
+  decoder: str = "linear"
+  decoder_bias: bool = True
+  decoder_noise: bool = True
+  squash_z: bool = False
+  policy_hidden: tuple[int, ...] = (128, 128)
+  value_hidden: tuple[int, ...] = (128, 128)
+  decoder_hidden: tuple[int, ...] = (128, 128)
+  discriminator_hidden: tuple[int, ...] = (128, 128)
+  init_z_std: float = 1.0
+  init_action_std: float = 0.3
+
+  def setup(self):
+    b = self.n_synergies
+    self.heads = [GaussianHead(self.policy_hidden, b, self.init_z_std)
+                  for _ in self.obs_sizes]
+    self.values = [MLP(self.value_hidden, 1) for _ in self.obs_sizes]
+    if self.decoder == "linear":
+      self.synergy_decoder = LinearDecoder(self.action_size, self.decoder_bias, self.init_action_std)
+    elif self.decoder == "mlp":
+      self.synergy_decoder = GaussianHead(self.decoder_hidden, self.action_size,
+                                          self.init_action_std, out_scale=1.0)
+    elif self.decoder != "identity":
+      raise ValueError(f"unknown decoder {self.decoder!r}")
+    if self.has_discriminator:
+      self.discriminator = GaussianHead(self.discriminator_hidden, b, 1.0, out_scale=1.0)
+
+  @property
+  def has_discriminator(self) -> bool:
+    return self.decoder != "identity"
+
+  def policy(self, task: int, obs):
+    """(mean, log_std) of pi(z | s, task)."""
+    return self.heads[task](obs)
+
+  def value(self, task: int, obs):
+    return self.values[task](obs)[..., 0]
+
+  def decode(self, z):
+    """(mean, log_std) of p(a | z); log_std is None for a noiseless decoder (identity, or
+    `decoder_noise` off)."""
+    if self.decoder == "identity":
+      return z, None
+    mean, log_std = self.synergy_decoder(jnp.tanh(z) if self.squash_z else z)
+    return mean, log_std if self.decoder_noise else None
+
+  def discriminate(self, a):
+    """(mean, log_std) of q(z | a)."""
+    return self.discriminator(a)
+
+  def __call__(self, observations: Sequence[jax.Array]):
+    """Touch every part once (for init): observations is one batch per task."""
+    out = []
+    for n, obs in enumerate(observations):
+      z, _ = self.policy(n, obs)
+      a, _ = self.decode(z)
+      out.append((z, self.value(n, obs), a))
+      if self.has_discriminator:
+        self.discriminate(a)
+    return out
+
+
+def build(config, obs_sizes: Sequence[int], action_size: int) -> DiscoSyn:
+  """The module a TrainConfig describes, for tasks with these observation sizes."""
+  b = action_size if config.decoder == "identity" else config.n_synergies
+  return DiscoSyn(
+      obs_sizes=tuple(int(s) for s in obs_sizes), n_synergies=b, action_size=action_size,
+      decoder=config.decoder, decoder_bias=config.decoder_bias, decoder_noise=config.decoder_noise,
+      squash_z=config.squash_z,
+      policy_hidden=tuple(config.policy_hidden), value_hidden=tuple(config.value_hidden),
+      decoder_hidden=tuple(config.decoder_hidden),
+      discriminator_hidden=tuple(config.discriminator_hidden),
+      init_z_std=config.init_z_std, init_action_std=config.init_action_std)
+
+
+# Top-level parameter collections by role: the optimiser labels them (ppo.optimizer), the
+# gradient norms are logged per role (train.py).
+def role(name: str) -> str:
+  if name.startswith("heads_"):
+    return "heads"
+  if name.startswith("values_"):
+    return "values"
+  if name == "synergy_decoder":
+    return "decoder"
+  if name == "discriminator":
+    return "discriminator"
+  raise ValueError(f"parameter collection {name!r} has no role")
+
+
+def split_seed_key(key, n_tasks: int):
+  """(the state's rng, the parameters' key, a reset key per task): what `Trainer.init` draws
+  from the key of its seed."""
+  key, init_key, *env_keys = jax.random.split(key, 2 + n_tasks)
+  return key, init_key, env_keys
+
+
+def random_decoder(config: TrainConfig, action_size: int):
+  """The random decoder parameters a run of `config` starts from, without building its envs:
+  the decoder's initialisation draws from its own path in the module, whatever the
+  observation sizes of the heads (tests/test_discovery.py checks it)."""
+  model = build(config, (1,) * len(config.tasks), action_size)
+  _, init_key, _ = split_seed_key(jax.random.PRNGKey(config.seed), len(config.tasks))
+  params = model.init(init_key, [jnp.zeros((1, 1))] * len(config.tasks))
+  return params["params"]["synergy_decoder"]

@@ -1,0 +1,111 @@
+"""What a task is: a scene plus pure JAX functions of the physics view.
+
+A task never touches a backend's structures: every method below reads a `PhysicsView`
+(qpos, qvel, sensors) and the task's own `info` dict, so one task code runs on both
+physics backends.
+"""
+
+from __future__ import annotations
+
+import abc
+import dataclasses
+import pathlib
+from typing import Any
+
+import jax
+import mujoco
+
+from discosyn_jax import checks
+from discosyn_jax.config import CONTROL_DT
+from discosyn_jax.env import hands, scene
+from discosyn_jax.env.physics import PhysicsView
+
+Info = dict[str, Any]
+_CONES = {"pyramidal": mujoco.mjtCone.mjCONE_PYRAMIDAL, "elliptic": mujoco.mjtCone.mjCONE_ELLIPTIC}
+
+
+@dataclasses.dataclass(frozen=True)
+class TaskConfig:
+  """What every task has; task families subclass it with their own fields."""
+
+  episode_length: int = 100  # control steps of 0.04 s: 4 s
+  # The physics of one control step (CONTROL_DT): n_substeps MuJoCo steps of CONTROL_DT /
+  # n_substeps each; the solver settings go to the model's <option>. These defaults are the
+  # "reference" physics; a run's profile may override them (tasks.physics_overrides).
+  n_substeps: int = 10
+  solver_iterations: int = 8
+  ls_iterations: int = 8
+  cone: str = "pyramidal"  # or "elliptic"
+  # False: contacts keep the 0.01 s time constant of their solref at timesteps over 5 ms,
+  # where MuJoCo's refsafe would raise it to 2 x timestep (softer: deeper penetration)
+  refsafe: bool = True
+  hand_noise: float = 0.05  # rad, uniform noise on the initial hand joint angles
+
+  def __post_init__(self):
+    # every task's config (and every override of one): types, finite numbers, then ranges;
+    # the task classes check their own fields' ranges
+    checks.fields(self)
+    for name in ("episode_length", "n_substeps", "solver_iterations", "ls_iterations"):
+      if getattr(self, name) < 1:
+        raise ValueError(f"{name} must be at least 1, not {getattr(self, name)}")
+    if self.cone not in _CONES:
+      raise ValueError(f"cone must be one of {', '.join(_CONES)}, not {self.cone!r}")
+    if self.hand_noise < 0:
+      raise ValueError(f"hand_noise must not be negative, not {self.hand_noise}")
+
+  @property
+  def timestep(self) -> float:
+    return CONTROL_DT / self.n_substeps
+
+
+class Task(abc.ABC):
+  scene: str | pathlib.Path  # an object of xml/objects/ by name, or a task's own object MJCF file
+  mount = hands.PALM_DOWN  # or hands.PALM_UP, for objects that rest on the palm
+  config_class: type = TaskConfig  # a task of one's own: its config (tasks.load)
+  summary: str = ""  # one line for `discosyn tasks`
+
+  def __init__(self, config: TaskConfig):
+    self.config = config
+
+  def build_model(self, hand: str | hands.Hand = hands.DEFAULT) -> mujoco.MjModel:
+    """The task's scene with `hand` (hands.load), compiled."""
+    spec = scene.load_spec(self.scene, hand, self.mount)
+    option, config = spec.option, self.config
+    option.timestep, option.iterations = config.timestep, config.solver_iterations
+    option.ls_iterations, option.cone = config.ls_iterations, _CONES[config.cone]
+    if not config.refsafe:
+      option.disableflags |= mujoco.mjtDisableBit.mjDSBL_REFSAFE
+    self.edit_spec(spec)
+    model = spec.compile()
+    self.dt = CONTROL_DT
+    self.bind(model)
+    return model
+
+  def edit_spec(self, spec: mujoco.MjSpec) -> None:
+    """Set config-dependent parameters of the scene before it is compiled."""
+
+  def bind(self, model: mujoco.MjModel) -> None:
+    """Look up the indices the pure functions need (called once, on the host)."""
+
+  @abc.abstractmethod
+  def initial_state(self, rng: jax.Array) -> tuple[jax.Array, jax.Array, Info]:
+    """(qpos, qvel, info) of a fresh episode."""
+
+  @abc.abstractmethod
+  def observation(self, view: PhysicsView, info: Info) -> jax.Array: ...
+
+  @abc.abstractmethod
+  def reward_terms(self, prev: PhysicsView, view: PhysicsView, info: Info) -> dict[str, jax.Array]:
+    """Reward of the transition prev -> view, as named terms that sum to the reward."""
+
+  @abc.abstractmethod
+  def success(self, view: PhysicsView, info: Info) -> jax.Array:
+    """1.0 where the episode counts as solved if it ended in this state, else 0.0."""
+
+  def show(self, model: mujoco.MjModel, data: mujoco.MjData, info: Info) -> None:
+    """Draw an episode's own values (e.g. a goal) into `data` before it is rendered."""
+
+  def terminated(self, view: PhysicsView, info: Info) -> jax.Array:
+    """1.0 where the episode ends before its time limit (e.g. a dropped object)."""
+    del view, info
+    return jax.numpy.zeros(())

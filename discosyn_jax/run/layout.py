@@ -1,0 +1,27 @@
+"""The run folder's layout: every name in it, spelled once.
+
+  RUN/config.json        the TrainConfig (config.py)
+  RUN/metrics.jsonl      one row per train step; eval.jsonl one per evaluation (logs.py)
+  RUN/tb/                the same as TensorBoard scalars
+  RUN/checkpoints/<step> periodic checkpoints; RUN/final/ the last (checkpoints.py)
+  RUN/plots/             the training curves (plots.py)
+  RUN/writer.lock        held by the one process that writes the run (owner.py)
+  RUN/replaced/          a run --force replaces, until the new one's first checkpoint
+  RUN/experiment.json    what `discosyn experiment` ran it as (experiments/paper.py)
+"""
+
+CONFIG_FILE = "config.json"
+METRICS_FILE = "metrics.jsonl"
+EVAL_FILE = "eval.jsonl"
+TENSORBOARD_DIR = "tb"
+PERIODIC = "checkpoints"
+FINAL = "final"
+PLOTS_DIR = "plots"
+LOCK = "writer.lock"
+ASIDE = "replaced"
+EXPERIMENT_FILE = "experiment.json"
+
+# what a run of this product holds besides its config: --force replaces a folder only if it
+# holds config.json and one of these (a config.json alone may be anyone's)
+RUN_NAMES = frozenset({METRICS_FILE, EVAL_FILE, TENSORBOARD_DIR, PERIODIC, FINAL, PLOTS_DIR,
+                       LOCK, ASIDE})

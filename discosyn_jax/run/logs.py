@@ -1,0 +1,128 @@
+"""A run's logs: the JSON-lines files the loop writes (read back here for plots and reports)
+and the same numbers as TensorBoard event files (tensorboardX: no TensorFlow needed).
+
+`tensorboard --logdir RUN/tb` shows a run; `--logdir runs` compares runs.
+"""
+
+from __future__ import annotations
+
+import json
+import lzma
+import pathlib
+import time
+
+from discosyn_jax import atomic
+from discosyn_jax.run import layout
+
+# A kept run's bulky log compressed (docs/results keeps metrics.jsonl as metrics.jsonl.xz:
+# `xz -9 RUN/metrics.jsonl`); readers take either.
+ARCHIVED = ".xz"
+
+# bookkeeping columns of the rows: the x axes, not curves of their own
+_AXES = frozenset({"step", "env_steps", "wall_s", "finite"})
+
+
+def read_jsonl(path: pathlib.Path) -> list[dict]:
+  """The rows of a JSON-lines file. A last line cut short (a run killed while writing it)
+  is left out; any other line that is not a JSON object is an error."""
+  path = pathlib.Path(path)
+  if not path.is_file():
+    raise ValueError(f"{path} does not exist")
+  opener = lzma.open if path.suffix == ARCHIVED else open
+  with opener(path, "rt") as f:
+    lines = f.read().splitlines(keepends=True)
+  rows = []
+  for number, line in enumerate(lines, 1):
+    if not line.strip():
+      continue
+    try:
+      row = json.loads(line)
+    except json.JSONDecodeError:
+      if number == len(lines) and not line.endswith("\n"):
+        break
+      raise ValueError(f"{path}, line {number}: not JSON") from None
+    if not isinstance(row, dict):
+      raise ValueError(f"{path}, line {number}: not a JSON object")
+    rows.append(row)
+  return rows
+
+
+def read_log(path: pathlib.Path) -> list[dict]:
+  """The rows of the log at `path` or of its archive `path`.xz; none when neither exists."""
+  path = pathlib.Path(path)
+  for candidate in (path, path.with_name(path.name + ARCHIVED)):
+    if candidate.is_file():
+      return read_jsonl(candidate)
+  return []
+
+
+def tag(name: str, kind: str) -> str:
+  """TensorBoard tag of a column: per-task training figures keep their `task/` group,
+  figures of the whole update go under train/, evaluations under eval/."""
+  if kind == "eval":
+    return f"eval/{name}"
+  return name if "/" in name else f"train/{name}"
+
+
+def cut(path: pathlib.Path, step: int) -> list[dict]:
+  """Keep the rows of a JSON-lines log up to train step `step` (a resumed run's restored
+  step), and no line that is not a whole JSON object (a line a kill cut short); return the
+  rows kept. The file is replaced in one step, so a kill here loses nothing."""
+  path = pathlib.Path(path)
+  if not path.is_file():
+    return []
+  kept, rows = [], []
+  for line in path.read_text().splitlines():
+    try:
+      row = json.loads(line)
+    except json.JSONDecodeError:
+      continue
+    if isinstance(row, dict) and row.get("step", step + 1) <= step:
+      kept.append(line + "\n")
+      rows.append(row)
+  atomic.write_text(path, "".join(kept))
+  return rows
+
+
+class TensorBoard:
+  """Writes the rows of metrics.jsonl and eval.jsonl as scalars over env steps.
+
+  Events are written in the calling thread (tensorboardX's EventsWriter, not its
+  SummaryWriter's queue and thread), so a full disk raises here like any other write.
+  `history` (metrics rows, eval rows), for a resumed run, replaces the event files by those
+  rows: the logs then hold what an unbroken run's hold, nothing after the restored step.
+  """
+
+  def __init__(self, run_dir: pathlib.Path, history: tuple[list[dict], list[dict]] | None = None):
+    from tensorboardX.event_file_writer import EventsWriter
+
+    folder = pathlib.Path(run_dir) / layout.TENSORBOARD_DIR
+    if history is None:
+      folder.mkdir(exist_ok=True)
+      self.events = EventsWriter(str(folder / "events"))
+      return
+    atomic.settle(folder)
+    new = atomic.sibling(folder, atomic.NEW)
+    new.mkdir()
+    self.events = EventsWriter(str(new / "events"))
+    for rows, kind in zip(history, ("train", "eval")):
+      for row in rows:
+        self.write(row, kind)
+    atomic.swap_in(new, folder)  # the open event file moves with its folder
+
+  def write(self, row: dict, kind: str) -> None:
+    """`kind` is "train" (a metrics.jsonl row) or "eval" (an eval.jsonl row)."""
+    from tensorboardX.proto.event_pb2 import Event
+    from tensorboardX.proto.summary_pb2 import Summary
+
+    values = [Summary.Value(tag=tag(name, kind), simple_value=float(value))
+              for name, value in row.items() if name not in _AXES]
+    self.events.write_event(Event(wall_time=time.time(), step=int(row["env_steps"]),
+                                  summary=Summary(value=values)))
+    self.events.flush()
+
+  def __enter__(self) -> "TensorBoard":
+    return self
+
+  def __exit__(self, *exc) -> None:
+    self.events.close()

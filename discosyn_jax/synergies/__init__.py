@@ -1,0 +1,2 @@
+"""Synergies: PCA / autoencoder fits and synergy files, the physics prior a decoder starts
+from, the cross-seed overlap of learned subspaces, and the decoder's movement."""

@@ -1,0 +1,313 @@
+"""Synergy models outside DiscoSyn: the sequential baselines' PCA and autoencoder, fitted to
+the actions of trained policies, and the one way decoders are loaded into a run.
+
+A fitted model is written as a *synergy file* (.npz): the decoder's parameters, in exactly
+the layout of DiscoSyn's own decoder (linear: `synergies.kernel` (k, 20) and
+`synergies.bias`; mlp: networks.GaussianHead's), plus a JSON `meta` entry with the config
+fields the decoder needs (decoder, n_synergies, decoder_hidden) and its explained variance.
+A run directory works as a source too: its latest checkpoint's decoder.
+
+Both fitted decoders take z on a unit scale: PCA's components are scaled by the standard
+deviation along them, the autoencoder's latent code is standardised and the scaling is
+folded into the decoder's first layer. A policy head that starts with std 1 then explores
+about one data standard deviation along every synergy.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import pathlib
+import tempfile
+from typing import Any
+
+import flax.linen as nn
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+
+from discosyn_jax.agent import networks
+
+ARCHITECTURE = ("decoder", "n_synergies", "decoder_bias", "decoder_hidden", "squash_z")
+_DEFAULTS = {"squash_z": False}  # fields added since the first synergy files were written
+
+
+def architecture(fields: dict[str, Any]) -> dict[str, Any]:
+  """The ARCHITECTURE fields of a meta or a dict of config fields, defaults filled in."""
+  fields = {**_DEFAULTS, **fields}
+  return {k: fields[k] for k in ARCHITECTURE}
+_RUN_DECODER = "params.params.synergy_decoder."
+
+
+def applied_actions(rollouts: dict[str, dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+  """{task: (samples, action_size)}: the actions the envs applied (clipped to [-1, 1]) at
+  the steps of `Trainer.rollouts` where the episode was still running."""
+  out = {}
+  for name, traj in rollouts.items():
+    alive = np.asarray(traj["alive"]) > 0
+    out[name] = np.clip(np.asarray(traj["action"])[alive], -1.0, 1.0)
+  return out
+
+
+def explained_variance(actions: np.ndarray, reconstructed: np.ndarray) -> float:
+  """The fraction of the actions' total variance (about their mean) a reconstruction explains."""
+  total = np.sum((actions - actions.mean(axis=0)) ** 2)
+  return float(1.0 - np.sum((actions - reconstructed) ** 2) / total)
+
+
+def _residual_log_std(actions, reconstructed):
+  # what a Gaussian p(a|z) fitted to the data would have; unused by noiseless baselines
+  return np.log(np.maximum((actions - reconstructed).std(axis=0), 1e-3)).astype(np.float32)
+
+
+def fit_pca(actions: np.ndarray, k: int) -> tuple[dict, float]:
+  """A linear decoder a = mean + z (sqrt(var_i) v_i) from the top-k principal components,
+  and the fraction of variance they explain (the sum of their eigenvalue fractions)."""
+  from sklearn.decomposition import PCA
+
+  _check_k(k, actions)
+  pca = PCA(n_components=k).fit(actions)
+  kernel = (pca.components_ * np.sqrt(pca.explained_variance_)[:, None]).astype(np.float32)
+  bias = pca.mean_.astype(np.float32)
+  reconstructed = pca.inverse_transform(pca.transform(actions))
+  params = {"synergies": {"kernel": kernel, "bias": bias},
+            "log_std": _residual_log_std(actions, reconstructed)}
+  return params, float(np.sum(pca.explained_variance_ratio_))
+
+
+class Autoencoder(nn.Module):
+  """a -> z (k) -> a; the decoder half is the module DiscoSyn's mlp decoder uses."""
+  k: int
+  hidden: tuple[int, ...]
+  action_size: int
+
+  def setup(self):
+    self.encoder = networks.MLP(self.hidden, self.k)
+    self.decoder = networks.GaussianHead(self.hidden, self.action_size, 1.0, out_scale=1.0)
+
+  def encode(self, a):
+    return self.encoder(a)
+
+  def __call__(self, a):
+    return self.decoder(self.encoder(a))[0]
+
+
+def fit_autoencoder(actions: np.ndarray, k: int, hidden=(128, 128), steps: int = 3000,
+                    batch: int = 256, learning_rate: float = 1e-3, seed: int = 0) -> tuple[dict, float]:
+  """An MLP autoencoder with a k-dimensional code, trained by Adam on the reconstruction
+  error; its decoder (code standardised) and the fraction of variance it explains."""
+  _check_k(k, actions)
+  data = jnp.asarray(actions, jnp.float32)
+  model = Autoencoder(k, tuple(hidden), data.shape[1])
+  init_key, key = jax.random.split(jax.random.PRNGKey(seed))
+  params = model.init(init_key, data[:1])
+  optimizer = optax.adam(learning_rate)
+
+  def loss(p, x):
+    return jnp.mean((model.apply(p, x) - x) ** 2)
+
+  def step(carry, key):
+    p, opt = carry
+    x = data[jax.random.randint(key, (min(batch, data.shape[0]),), 0, data.shape[0])]
+    value, grads = jax.value_and_grad(loss)(p, x)
+    updates, opt = optimizer.update(grads, opt, p)
+    return (optax.apply_updates(p, updates), opt), value
+
+  train = jax.jit(lambda p, o, keys: jax.lax.scan(step, (p, o), keys))
+  (params, _), _ = train(params, optimizer.init(params), jax.random.split(key, steps))
+
+  code = np.asarray(model.apply(params, data, method=Autoencoder.encode))
+  mean, std = code.mean(axis=0), np.maximum(code.std(axis=0), 1e-6)
+  decoder = standardised_input(params["params"]["decoder"], mean, std)
+  reconstructed = np.asarray(model.apply(params, data))
+  decoder["log_std"] = _residual_log_std(actions, reconstructed)
+  return decoder, explained_variance(actions, reconstructed)
+
+
+def standardised_input(decoder: dict, mean: np.ndarray, std: np.ndarray) -> dict:
+  """An MLP decoder's params (GaussianHead layout) taking z = (code - mean) / std instead
+  of the code: decoder(mean + std * z), the scaling folded into its first layer."""
+  decoder = jax.tree.map(np.asarray, decoder)
+  first = decoder["MLP_0"]["Dense_0"]
+  first["bias"] = (first["bias"] + mean @ first["kernel"]).astype(np.float32)
+  first["kernel"] = (std[:, None] * first["kernel"]).astype(np.float32)
+  return decoder
+
+
+def _decoder_model(fields: dict[str, Any], params: dict) -> networks.DiscoSyn:
+  """A module around the decoder described by `fields` (ARCHITECTURE) with these params."""
+  from discosyn_jax.config import TrainConfig
+
+  config = TrainConfig(**architecture(fields))
+  action_size = int(np.shape(params["log_std"])[-1])
+  return networks.build(config, obs_sizes=(1,), action_size=action_size)
+
+
+def decode(fields: dict[str, Any], params: dict, z: np.ndarray) -> np.ndarray:
+  """The decoder's mean at z, for a decoder described by `fields` (ARCHITECTURE)."""
+  model = _decoder_model(fields, params)
+  return np.asarray(model.apply({"params": {"synergy_decoder": params}}, jnp.asarray(z),
+                                method=networks.DiscoSyn.decode)[0])
+
+
+def basis(fields: dict[str, Any], params: dict) -> np.ndarray:
+  """The (action_size, b) synergy basis of a decoder (diagnostics.synergy_basis: the linear
+  decoder's W, an MLP decoder's Jacobian at z = 0)."""
+  from discosyn_jax.synergies import diagnostics
+
+  model = _decoder_model(fields, params)
+  return np.asarray(diagnostics.synergy_basis(model, {"params": {"synergy_decoder": params}}))
+
+
+def in_subspace_of(learned: dict, start: dict) -> dict:
+  """A linear decoder with the learned one's scale, offset and noise in the subspace of
+  `start`: with the learned basis W = U S V^T (action_size, b) and U0 the left singular
+  vectors of start's, W' = U0 S V^T; bias and log std are the learned ones."""
+  u, s, vt = np.linalg.svd(np.asarray(learned["synergies"]["kernel"], np.float64).T,
+                           full_matrices=False)
+  u0 = np.linalg.svd(np.asarray(start["synergies"]["kernel"], np.float64).T,
+                     full_matrices=False)[0]
+  out = jax.tree.map(lambda x: np.asarray(x, np.float32), learned)
+  out["synergies"]["kernel"] = ((u0 * s) @ vt).T.astype(np.float32)
+  return out
+
+
+def _check_k(k: int, actions: np.ndarray):
+  if not 1 <= k <= min(actions.shape):
+    raise ValueError(f"cannot fit {k} synergies to {actions.shape[0]} actions of size "
+                     f"{actions.shape[1]}")
+
+
+# -- synergy files -------------------------------------------------------------
+def save(path: pathlib.Path, params: dict, fields: dict[str, Any], **meta) -> pathlib.Path:
+  """Write a synergy file (atomically: a crash leaves no half-written file)."""
+  path = pathlib.Path(path)
+  path.parent.mkdir(parents=True, exist_ok=True)
+  flat = {".".join(str(getattr(k, "key", k)) for k in keys): np.asarray(leaf)
+          for keys, leaf in jax.tree_util.tree_flatten_with_path(params)[0]}
+  info = {**architecture(fields), **meta}
+  fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz")
+  with os.fdopen(fd, "wb") as f:
+    np.savez(f, meta=np.array(json.dumps(info)), **flat)
+  os.replace(tmp, path)
+  return path
+
+
+def read(path: str | pathlib.Path) -> tuple[dict[str, Any], dict]:
+  """(meta with the decoder's config fields, decoder params) of a synergy file or a run."""
+  path = pathlib.Path(path)
+  if path.is_dir():
+    from discosyn_jax.run import checkpoints, reading
+
+    config, _, flat = reading.read_run(path, lambda c: checkpoints.read_arrays(c, _RUN_DECODER))
+    if config.decoder == "identity":
+      raise ValueError(f"{path} is a full-action run: it has no synergy decoder")
+    meta = {k: getattr(config, k) for k in ARCHITECTURE}
+  elif path.is_file():
+    try:
+      with np.load(path) as data:
+        meta = json.loads(str(data["meta"]))
+        flat = {k: data[k] for k in data.files if k != "meta"}
+    except (OSError, ValueError, KeyError, EOFError) as err:
+      raise ValueError(f"{path} is not a synergy file ({type(err).__name__}: {err})") from None
+    _check_file(path, meta, flat)
+  else:
+    raise ValueError(f"decoder source {path} does not exist")
+  meta = {**_DEFAULTS, **meta}
+  meta["decoder_hidden"] = tuple(meta["decoder_hidden"])
+  params: dict = {}
+  for name, value in flat.items():
+    node = params
+    *parents, leaf = name.split(".")
+    for part in parents:
+      node = node.setdefault(part, {})
+    node[leaf] = np.asarray(value, np.float32)
+  return meta, params
+
+
+def _check_file(path, meta, flat: dict) -> None:
+  """A synergy file holds the decoder its meta describes, every array in its shape: one
+  line naming the first thing that differs (before any run folder is made)."""
+  from discosyn_jax.config import TrainConfig
+
+  fields = {**_DEFAULTS, **meta} if isinstance(meta, dict) else {}
+  missing = [k for k in ARCHITECTURE if k not in fields]
+  if missing:
+    raise ValueError(f"{path} is not a synergy file: its meta has no {missing[0]}")
+  try:
+    config = TrainConfig(**{k: tuple(v) if isinstance(v, list) else v  # JSON has no tuples
+                            for k, v in architecture(fields).items()}).validate()
+  except (TypeError, ValueError) as err:
+    raise ValueError(f"{path} is not a synergy file: {err}") from None
+  # the hand's 20 actuators, unless the file's noise says otherwise (a malformed one: its
+  # shape is then named below)
+  action_size = np.shape(flat["log_std"])[-1] if np.ndim(flat.get("log_std", 0)) else 20
+  model = networks.build(config, obs_sizes=(1,), action_size=action_size)
+  shapes = jax.eval_shape(model.init, jax.random.PRNGKey(0), [jnp.zeros((1, 1))])
+  want = {".".join(str(k.key) for k in keys): tuple(leaf.shape) for keys, leaf in
+          jax.tree_util.tree_flatten_with_path(shapes["params"]["synergy_decoder"])[0]}
+  have = {k: tuple(np.shape(v)) for k, v in flat.items()}
+  for name in sorted(set(want) | set(have)):
+    if want.get(name) != have.get(name):
+      raise ValueError(f"{path} does not hold the {config.decoder} decoder its meta describes: "
+                       f"{name} is {have.get(name, 'absent')} there, {want.get(name, 'absent')} "
+                       f"for that decoder")
+
+
+def starting_decoder(config) -> dict | None:
+  """The decoder params a fresh run of `config` starts from: its `decoder_from`, else None
+  (the Trainer's random initialisation)."""
+  return load_decoder(config.decoder_from, config) if config.decoder_from else None
+
+
+def load_decoder(path, config) -> dict:
+  """The decoder params of `path` for a run of `config`; ValueError in one line when the
+  decoder is not the one the config describes."""
+  meta, params = read(path)
+  for name in ARCHITECTURE:
+    if name == "decoder_hidden" and meta["decoder"] != "mlp":
+      continue
+    if name == "decoder_bias" and meta["decoder"] != "linear":
+      continue
+    if meta[name] != getattr(config, name):
+      raise ValueError(f"the decoder in {path} has {name} = {meta[name]!r}, the config asks for "
+                       f"{getattr(config, name)!r}")
+  return params
+
+
+def method_name(meta) -> str:
+  """The paper's name of a synergy model: 'PCA4', 'AE6', 'DiscoSyn3-L', 'DiscoSyn4-NL', and
+  'Random3-L' for the control (a decoder frozen at its random initialisation), and
+  'DiscoSyn3-L-wd3' for a decoder learned with weight decay 3 (a tie-breaker),
+  'DiscoSyn3-L-wd8a200' for one whose decay falls to nothing over 200 train steps;
+  'DiscoSyn3-L-prior' for one started from the physics prior, 'Prior3-L' for that start
+  frozen; 'DiscoSyn3-L-reward' and 'Prior3-L-reward' for the reward prior's.
+  `meta` is a synergy file's meta, or anything with the ARCHITECTURE fields (a config)."""
+  get = meta.get if isinstance(meta, dict) else lambda k, d=None: getattr(meta, k, d)
+  if get("method"):
+    return f"{get('method')}{get('n_synergies')}"
+  # a config whose decoder is frozen at its own start: DiscoSyn's controls, Random or Prior
+  init = get("decoder_init", "random")
+  kind = "DiscoSyn"
+  if get("freeze_decoder") and not get("decoder_from"):
+    kind = "Random" if init == "random" else "Prior"
+  name = f"{kind}{get('n_synergies')}-{'L' if get('decoder') == 'linear' else 'NL'}"
+  if init != "random" and (kind, init) != ("Prior", "physics"):
+    name += "-prior" if init == "physics" else f"-{init}"
+  decay = 0 if get("freeze_decoder") else get("decoder_weight_decay")  # frozen: never applied
+  if not decay:
+    return name
+  anneal = get("decoder_weight_decay_steps", 0)
+  return f"{name}-wd{decay:g}" + (f"a{anneal}" if anneal else "")
+
+
+def frozen_fields(meta: dict[str, Any], path) -> dict[str, Any]:
+  """The TrainConfig fields of a run in the frozen synergy space of `path` (its `meta` as
+  `read` gives it): the decoder's architecture, frozen, no discriminator bonus and no
+  decoder entropy (constants here). Fitted PCA / autoencoder spaces act with their mean
+  (no noise outside the space); a DiscoSyn decoder keeps the noise it learned."""
+  return dict(architecture(meta), decoder_from=str(pathlib.Path(path).resolve()),
+              freeze_decoder=True, decoder_noise="method" not in meta, alpha2=0.0, alpha3=0.0,
+              decoder_weight_decay=0.0, decoder_weight_decay_steps=0, decoder_init="random")
+

@@ -1,0 +1,142 @@
+"""A synergy prior from the physics: the action directions that move the task objects most,
+pooled over the task set (a tie-breaker; docs/TRAINING_NOTES.md has its runs).
+
+For each env: states of a uniform random policy (a fixed seed, never the run's); at each,
+every action pushed by +-DELTA for one control step, and the objects' velocities after it
+(the qvel of every joint that is not the hand's) differenced into a Jacobian J (object dofs
+x actions). M_env = the sum over states of J^T J, scaled to trace 1 so that each task counts
+alike; the prior basis is the top-b eigenvectors of their sum. It depends on the tasks, the
+hand and the physics, never on a training seed, so every seed's decoder starts in the same
+subspace (`start`: each keeps its own random scale, bias and noise).
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from discosyn_jax.env import hands
+from discosyn_jax.synergies import fitting
+
+DELTA = 0.5  # the push on each action, in its [-1, 1] range
+ENVS, EVERY = 32, 5  # random episodes per task, and every EVERY-th step of them kept
+SEED = 0  # the prior's own: the same prior for every training seed
+CHUNK = 64  # states whose pushes are stepped at once (bounds the memory of MJX envs)
+
+
+def _object_dofs(env) -> list[int]:
+  """The qvel addresses of what is not the hand; ValueError where there is nothing to move."""
+  if not hasattr(env, "mj_model"):
+    raise ValueError(f"the physics prior needs hand tasks; {type(env).__name__} has no physics")
+  hand_v = set(hands.qvel_indices(env.mj_model).tolist())
+  dofs = [i for i in range(env.mj_model.nv) if i not in hand_v]
+  if not dofs:
+    raise ValueError(f"the physics prior needs objects that move: {type(env.task).__name__}'s "
+                     "scene has none")
+  return dofs
+
+
+def check(envs) -> None:
+  """ValueError in one line where the prior cannot be made (before a run folder is)."""
+  for env in envs:
+    _object_dofs(env)
+
+
+RESPONSES = ("objects", "reward")  # what the pushes are read by (module docstring)
+POOLINGS = ("trace", "share")  # how the tasks' metrics make one basis (`pool`)
+
+
+def jacobians(env, response: str = "objects") -> np.ndarray:
+  """(states, outputs, actions): how one control step's outcome answers each action pushed,
+  at states of a random policy. `response` "objects": the velocity of every object dof;
+  "reward": the task's reward of the step, what the task asks for (one output)."""
+  if response not in RESPONSES:
+    raise ValueError(f"the prior's response must be one of {', '.join(RESPONSES)}, not "
+                     f"{response!r}")
+  size = env.action_size
+  obj_v = jnp.asarray(_object_dofs(env), jnp.int32)
+
+  @jax.jit
+  def collect(key):
+    def body(state, key):
+      action = jax.random.uniform(key, (ENVS, size), minval=-1, maxval=1)
+      return jax.vmap(env.step)(state, action), (state, action)
+
+    start = jax.vmap(env.reset)(jax.random.split(key, ENVS))
+    keys = jax.random.split(jax.random.fold_in(key, 1), env.episode_length)
+    _, (states, actions) = jax.lax.scan(body, start, keys)
+    kept = lambda x: x[::EVERY].reshape((x[::EVERY].shape[0] * ENVS,) + x.shape[2:])
+    return jax.tree.map(kept, (states, actions))
+
+  def jacobian(pair):
+    state, action = pair
+
+    def outcome(a):
+      after = env.step(state, jnp.clip(a, -1, 1))
+      if response == "reward":
+        return after.reward[None]
+      return env.physics.view(after.pipeline_state).qvel[obj_v]
+
+    push = DELTA * jnp.eye(size)
+    plus = jax.vmap(lambda d: outcome(action + d))(push)
+    minus = jax.vmap(lambda d: outcome(action - d))(push)
+    return ((plus - minus) / (2 * DELTA)).T
+
+  states, actions = collect(jax.random.PRNGKey(SEED))
+  return np.asarray(jax.jit(lambda s, a: jax.lax.map(jacobian, (s, a), batch_size=CHUNK))(
+      states, actions))
+
+
+def object_jacobians(env) -> np.ndarray:
+  """(states, object dofs, actions) of one hand env (module docstring)."""
+  return jacobians(env, "objects")
+
+
+def metric(env, response: str = "objects") -> np.ndarray:
+  """(actions, actions): the task's response metric, the sum over states of J^T J, scaled to
+  trace 1 so that each task counts alike."""
+  jac = jacobians(env, response)
+  value = np.einsum("soa,sob->ab", jac, jac)
+  return value / max(np.trace(value), 1e-12)
+
+
+def pool(metrics: list[np.ndarray], b: int, pooling: str = "trace") -> np.ndarray:
+  """(actions, b) orthonormal directions from the tasks' metrics. "trace": the top-b
+  eigenvectors of their sum (a task whose response is spread thin can get none); "share":
+  each task its share, in turns: task after task, the top direction of what its metric
+  keeps outside the directions chosen so far."""
+  if pooling not in POOLINGS:
+    raise ValueError(f"the prior's pooling must be one of {', '.join(POOLINGS)}, not "
+                     f"{pooling!r}")
+  if pooling == "trace":
+    values, vectors = np.linalg.eigh(sum(metrics))
+    return vectors[:, np.argsort(values)[::-1][:b]]
+  size = metrics[0].shape[0]
+  chosen = np.zeros((size, 0))
+  for turn in range(b):
+    rest = np.eye(size) - chosen @ chosen.T  # the projector off the chosen directions
+    values, vectors = np.linalg.eigh(rest @ metrics[turn % len(metrics)] @ rest)
+    if values[-1] <= 1e-12:  # nothing of this task left outside the chosen: the pooled rest
+      values, vectors = np.linalg.eigh(rest @ sum(metrics) @ rest)
+    direction = rest @ vectors[:, -1]
+    chosen = np.column_stack([chosen, direction / np.linalg.norm(direction)])
+  return chosen
+
+
+def captured(directions: np.ndarray, metric_: np.ndarray) -> float:
+  """The share of a task's metric (trace 1) that span(directions) holds."""
+  q, _ = np.linalg.qr(directions)
+  return float(np.trace(q.T @ metric_ @ q) / max(np.trace(metric_), 1e-12))
+
+
+def basis(envs, b: int, response: str = "objects", pooling: str = "trace") -> np.ndarray:
+  """(actions, b): the prior's directions for a task set (module docstring)."""
+  return pool([metric(env, response) for env in envs], b, pooling)
+
+
+def start(random_decoder: dict, prior: np.ndarray) -> dict:
+  """A linear decoder's random initialisation turned into span(prior), keeping its singular
+  values, bias and noise (fitting.in_subspace_of)."""
+  own = jax.tree.map(np.asarray, random_decoder)
+  return fitting.in_subspace_of(own, {"synergies": {"kernel": prior.T.astype(np.float32)}})

@@ -1,0 +1,2 @@
+"""Training: the Trainer (init and the jitted train step on the envs it is given), the
+deterministic evaluation, the device mesh, and the host loop that runs a run in its folder."""

@@ -1,0 +1,326 @@
+"""The host loop: train steps, logs, evaluations and checkpoints, and nothing else.
+
+Everything numerical happens inside the jitted `Trainer.train_step`; between steps this
+loop writes one JSON line of metrics (and TensorBoard scalars, logs.py), evaluates the deterministic policy every
+`eval_every` steps, checkpoints every `checkpoint_every` steps and at the end, where it
+also draws the training curves (plots.py).
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import math
+import pathlib
+import shlex
+import sys
+import time
+from typing import Any, Callable
+
+import jax
+
+from discosyn_jax import checks
+from discosyn_jax import config as config_lib
+from discosyn_jax.agent import networks
+from discosyn_jax.config import TrainConfig
+from discosyn_jax.run import checkpoints, layout, logs, owner, reading, stop
+from discosyn_jax.synergies import fitting, physics_prior
+from discosyn_jax.training import evaluation
+from discosyn_jax.training.train import Trainer, TrainState
+from discosyn_jax.viz import plots
+
+
+class TrainingDiverged(RuntimeError):
+  """A loss or a parameter became non-finite; the last good checkpoint is kept."""
+
+
+class WriteFailed(ValueError):
+  """The run could not be written (a full disk, a folder made read-only); its last good
+  checkpoint is kept, and the message says where it is."""
+
+
+def starting_decoder(trainer: Trainer) -> dict | None:
+  """The decoder a fresh run starts from: its `decoder_from`, the physics prior's start
+  (physics_prior.py, computed once per trainer), or None (the Trainer's random one)."""
+  config = trainer.config
+  if config.decoder_init in config_lib.PRIORS:
+    return _prior_start(trainer)
+  return fitting.starting_decoder(config)
+
+
+@functools.lru_cache(maxsize=2)
+def _prior_start(trainer: Trainer) -> dict | None:
+  config = trainer.config
+  if config.n_synergies >= trainer.action_size:  # W spans every action: nothing to choose
+    return None
+  response, pooling = config_lib.PRIORS[config.decoder_init]
+  prior = physics_prior.basis(trainer.envs, config.n_synergies, response, pooling)
+  return physics_prior.start(networks.random_decoder(config, trainer.action_size), prior)
+
+
+def decoder_reference(trainer: Trainer, state: TrainState, log=print):
+  """The parameters whose decoder a run's movement is measured from: its initial decoder
+  (for a frozen one, the decoder itself). None without a decoder, or when a fine-tuned
+  decoder's source is gone."""
+  config = trainer.config
+  if trainer.decoder_drift is None:
+    return None
+  if config.freeze_decoder:
+    return jax.tree.map(lambda x: x.copy(), state.params)  # train_step donates the state
+  try:
+    return trainer.initial_params(decoder_params=starting_decoder(trainer))
+  except ValueError as e:
+    log(f"no decoder movement in the logs: {e}")
+    return None
+
+
+def restore(trainer: Trainer, checkpoint: pathlib.Path) -> TrainState:
+  # the template needs no decoder source: the checkpoint holds the decoder
+  return checkpoints.restore(checkpoint, trainer.init())
+
+
+def resume_latest(trainer: Trainer, run_dir: pathlib.Path,
+                  warn=checkpoints.warn) -> tuple[pathlib.Path | None, TrainState | None]:
+  """(checkpoint, state) of the newest checkpoint of a run that restores, (None, None) when
+  none does. Each damaged one on the way is named in one line and removed: the run goes
+  on from an older one and writes it anew."""
+  def damaged(checkpoint, err):
+    checkpoints.remove(checkpoint)
+    warn(f"{err}; removed it")
+
+  return checkpoints.read_newest(run_dir, lambda path: restore(trainer, path), damaged)
+
+
+def load_trained(path: pathlib.Path, make_trainer: Callable[[TrainConfig], Trainer], **changes) -> tuple[Trainer, TrainState]:
+  """The trainer and the restored state of a run (its newest checkpoint that restores) or
+  of a checkpoint; `changes` replace config fields that do not change the state's layout
+  (backend, eval_envs); `make_trainer(config)` builds the trainer (`tasks.trainer`; tests give
+  tiny envs)."""
+  run_dir = reading.find_run_dir(path)
+  config = config_lib.load(run_dir / layout.CONFIG_FILE)
+  trainer = make_trainer(config.replace(**changes).validate())
+  checks.memory(trainer.config, trainer.envs)
+  _, _, state = reading.read_run(path, lambda checkpoint: restore(trainer, checkpoint))
+  return trainer, state
+
+
+def train(config: TrainConfig, run_dir: pathlib.Path, *,
+          make_trainer: Callable[[TrainConfig], Trainer], resume: bool = False,
+          force: bool = False, progress: bool = True, log=print,
+          stop_at: float | None = None) -> dict[str, Any]:
+  """Run (or continue) a training run in `run_dir`; return the final evaluation.
+  `make_trainer(config)` builds the Trainer of the config the run goes on with (its envs
+  and devices: `tasks.trainer` for the registered tasks), once the folder is checked.
+  `stop_at`: end the run (final checkpoint and all) at the first evaluation at which every
+  task's deterministic success is at least this.
+
+  Everything that can refuse the run (the config, the folder, the envs, the memory they
+  need) is checked before the run directory is made; the run directory is then this
+  process's alone to its end (owner.Writer). Continuing a run restores its newest good
+  checkpoint and cuts its logs back to that step. A new run that ends before its first
+  checkpoint leaves no trace (a run it replaces is back). A write that fails mid-run (a full
+  disk) stops it with WriteFailed, Ctrl-C (or SIGTERM) with KeyboardInterrupt, both
+  naming the last good checkpoint.
+  """
+  run_dir = pathlib.Path(run_dir)
+  owner.refuse_if_written(run_dir)
+  config = reading.run_config(run_dir, config, resume, force)
+  trainer = make_trainer(config)
+  checks.memory(config, trainer.envs)
+  if config.decoder_init in config_lib.PRIORS:
+    physics_prior.check(trainer.envs)
+  with owner.Writer(run_dir) as writer:
+    # again, now that it is ours: another process may have made or replaced a run there
+    config = reading.run_config(run_dir, config, resume, force)
+    if not resume:
+      writer.begin(lambda: config_lib.save(config, run_dir / layout.CONFIG_FILE), replace=force)
+    at = {"step": 0, "checkpoint": None}  # where the run is: what a failure names
+    try:
+      return _train(trainer, run_dir, resume, writer, at, progress, log, stop_at)
+    except BaseException as err:
+      undone = writer.new and not writer.kept
+      replaced = writer.undo() if undone else False
+      where = _where(at["checkpoint"], undone, replaced)
+      stopped = stop.taken(err)  # Ctrl-C or SIGTERM, also one that aborted a physics callback
+      if stopped is not None:  # the same class: the CLI tells Ctrl-C from SIGTERM
+        newest = None if undone else checkpoints.latest(run_dir, warn=lambda _: None)
+        if newest:  # (a save the signal cut short may have made a newer one than at's)
+          where = (f"it resumes from {newest}: discosyn train --out "
+                   f"{shlex.quote(str(run_dir))} --resume")
+        raise type(stopped)(f"training stopped at step {at['step']}; {where}") from None
+      if isinstance(err, OSError):  # a full disk, a folder made read-only, a checkpoint not written
+        what = str(err) if isinstance(err, checkpoints.SaveFailed) else \
+            f"could not write {err.filename or run_dir}: {err.strerror or err}"
+        raise WriteFailed(f"training stopped at step {at['step']}: {what}; {where}") from None
+      if isinstance(err, TrainingDiverged):
+        raise TrainingDiverged(f"{err}; {where}") from None
+      raise
+
+
+def _train(trainer: Trainer, run_dir: pathlib.Path, resume: bool, writer: owner.Writer,
+           at: dict, progress: bool, log, stop_at: float | None) -> dict[str, Any]:
+  """The run itself, in a folder that is ours; `at` follows its step and last good
+  checkpoint."""
+  config = trainer.config
+  at["checkpoint"], state = _start(trainer, run_dir, resume, log)
+  at["step"] = int(state.step)
+  start = time.perf_counter()
+  train_step = trainer.train_step.lower(state).compile()
+  compile_s = time.perf_counter() - start
+  log(f"train step compiled in {compile_s:.1f} s; {config.env_steps_per_train_step:,} env steps "
+      f"per train step ({len(config.tasks)} tasks x {config.num_envs} envs x "
+      f"{config.unroll_length} steps)")
+
+  def save(final: bool = False) -> None:
+    at["checkpoint"] = checkpoints.save(run_dir, state, config.keep_checkpoints, final=final)
+    writer.keep()
+
+  start_step = int(state.step)
+  reference = decoder_reference(trainer, state, log)
+  bar = _progress(progress, start_step, config.steps)
+  shown = {}  # training success per task, as of the last rollout in which episodes ended
+  step = start_step
+  results, evaluated_at = None, None  # the newest evaluation, and its step
+  try:
+    history = _cut_logs(run_dir, start_step) if resume else None
+    # a resumed run's wall clock goes on from where its kept logs end, not from 0
+    start -= history[0][-1].get("wall_s", 0.0) if history and history[0] else 0.0
+    with open(run_dir / layout.METRICS_FILE, "a") as metrics_file, \
+         open(run_dir / layout.EVAL_FILE, "a") as eval_file, logs.TensorBoard(run_dir, history) as board:
+      if resume and _evaluates_at(config, step):  # the evaluation the cut removed, redone
+        _log_eval((eval_file, board), evaluation.evaluate(trainer, state), step, config,
+                  time.perf_counter() - start)
+      tick = time.perf_counter()
+      while int(state.step) < config.steps:
+        stop.check()  # a Ctrl-C or SIGTERM its handler could not raise where it landed
+        state, metrics = train_step(state)
+        if reference is not None:
+          metrics.update(trainer.decoder_drift(reference, state.params))
+        metrics = {k: float(v) for k, v in jax.device_get(metrics).items()}
+        for name in config.tasks:  # no episode ended in this rollout: no return or success to log
+          if metrics.get(f"{name}/episodes") == 0:
+            del metrics[f"{name}/return"], metrics[f"{name}/success"]
+        step = at["step"] = int(state.step)
+        now = time.perf_counter()
+        metrics.update(step=step, env_steps=step * config.env_steps_per_train_step,
+                       env_steps_per_s=config.env_steps_per_train_step / (now - tick),
+                       wall_s=now - start)
+        tick = now
+        metrics_file.write(json.dumps(metrics) + "\n")
+        metrics_file.flush()
+        board.write(metrics, "train")
+        if not metrics["finite"] or not math.isfinite(metrics["loss"]):
+          raise TrainingDiverged(f"non-finite loss or parameters at step {step}; training stopped")
+        if bar is not None:
+          shown.update({n: metrics[f"{n}/success"] for n in config.tasks if f"{n}/success" in metrics})
+          bar.set_postfix_str(" ".join(f"{n}:{v:.0%}" for n, v in list(shown.items())[:6]),
+                              refresh=False)
+          bar.update(1)
+        if _evaluates_at(config, step):
+          results, evaluated_at = evaluation.evaluate(trainer, state), step
+          _log_eval((eval_file, board), results, step, config, now - start)
+          if stop_at is not None and all(r["success"] >= stop_at for r in results.values()):
+            log(f"every task at >= {stop_at:.0%} deterministic success at step {step}: "
+                "the run ends here")
+            break
+        if config.checkpoint_every and step % config.checkpoint_every == 0:
+          save()
+      if bar is not None:
+        bar.close()
+        bar = None
+      if evaluated_at != step:
+        results = evaluation.evaluate(trainer, state)
+        _log_eval((eval_file, board), results, step, config, time.perf_counter() - start)
+    save(final=True)
+    curves = plots.run_curves(run_dir, run_dir / layout.PLOTS_DIR)
+  finally:
+    if bar is not None:
+      bar.close()
+  log(f"training curves: {', '.join(str(p) for p in curves)}")
+  log(evaluation.format_table(results, step, config))
+  return {"results": results, "state": state, "compile_s": compile_s}
+
+
+def _start(trainer: Trainer, run_dir: pathlib.Path, resume: bool, log):
+  """(checkpoint, state) to start from: the newest checkpoint that restores when
+  resuming (damaged ones on the way removed), else (None, a fresh state)."""
+  if resume:
+    checkpoints.tidy(run_dir)
+    checkpoint, state = resume_latest(trainer, run_dir)
+    if state is not None:
+      log(f"resumed from {checkpoint} at step {int(state.step)}")
+      return checkpoint, state
+    log(f"{run_dir} holds no good checkpoint: starting from step 0")
+  start = time.perf_counter()
+  decoder = starting_decoder(trainer)
+  if trainer.config.decoder_init in config_lib.PRIORS:
+    log(f"the decoder starts in the {trainer.config.decoder_init} prior's subspace (made in "
+        f"{time.perf_counter() - start:.0f} s)")
+  return None, trainer.init(decoder_params=decoder)
+
+
+def _evaluates_at(config: TrainConfig, step: int) -> bool:
+  """Whether the loop evaluates after train step `step` (the end of the run aside)."""
+  return bool(config.eval_every) and step % config.eval_every == 0 and 0 < step < config.steps
+
+
+def _cut_logs(run_dir: pathlib.Path, step: int) -> tuple[list[dict], list[dict]]:
+  """The logs of a resumed run cut back to its restored step: what an unbroken run held
+  then, but for the evaluation at that step, which may have been the end of a shorter run
+  (the loop redoes it where an unbroken run would have made it)."""
+  return (logs.cut(run_dir / layout.METRICS_FILE, step),
+          logs.cut(run_dir / layout.EVAL_FILE, step - 1))
+
+
+def _where(checkpoint: pathlib.Path | None, undone: bool, replaced: bool) -> str:
+  """What a run that stopped left: its last good checkpoint, or nothing."""
+  if checkpoint and not undone:
+    return f"the last good checkpoint is {checkpoint}"
+  if undone:  # a new run without a checkpoint was removed
+    return ("the new run made no checkpoint and was removed; the run it was to replace is "
+            "back as it was" if replaced else "the new run made no checkpoint and was removed")
+  return "no checkpoint was written"
+
+
+def _log_eval(outputs, results, step, config, wall_s):
+  file, board = outputs
+  row = {"step": step, "env_steps": step * config.env_steps_per_train_step, "wall_s": wall_s}
+  row.update({f"{n}/{k}": v for n, r in results.items() for k, v in r.items()})
+  file.write(json.dumps(row) + "\n")
+  file.flush()
+  board.write(row, "eval")
+
+
+def _progress(enabled: bool, start: int, total: int):
+  """A tqdm bar on a terminal; elsewhere (a log file, a notebook's captured stderr) one
+  line every tenth of the run, since a bar's carriage returns would flood the log."""
+  if not enabled:
+    return None
+  if not sys.stderr.isatty():
+    return _ProgressLines(start, total, every=max(1, total // 10))
+  from tqdm import tqdm
+
+  return tqdm(total=total, initial=start, unit="step", dynamic_ncols=True)
+
+
+class _ProgressLines:
+  """The part of tqdm's interface the loop uses, as plain lines on stderr."""
+
+  def __init__(self, start: int, total: int, every: int):
+    self.n, self.start, self.total, self.every, self.postfix = start, start, total, every, ""
+    self.began = time.perf_counter()
+
+  def update(self, n: int) -> None:
+    self.n += n
+    if self.n % self.every == 0 or self.n == self.total:
+      rate = (self.n - self.start) / (time.perf_counter() - self.began)
+      print(f"step {self.n}/{self.total}, {rate:.2f} steps/s {self.postfix}".rstrip(),
+            file=sys.stderr, flush=True)
+
+  def set_postfix_str(self, text: str, refresh: bool = True) -> None:
+    del refresh  # a line is written by update() only
+    self.postfix = text
+
+  def close(self) -> None:
+    pass
+

@@ -1,0 +1,299 @@
+"""The training step: one pure, jit-compiled function `train_step(state) -> (state, metrics)`.
+
+  for each task (a Python loop unrolled at trace time: tasks have different models)
+    lax.scan over unroll_length control steps, num_envs envs in parallel:
+      obs -> normalise -> head_n -> z -> decoder -> a -> env_n.step
+  extended reward r + alpha2 log q(z|a); GAE per task (brax's compute_gae, with truncation)
+  PPO epochs over minibatches, every task's samples in every minibatch; the discriminator is
+  fitted in the same optimiser steps on its own parameters (see ppo.py)
+
+Over several devices (devices.py) the rollout runs under `shard_map`, each device stepping
+its share of the envs; the rest is partitioned by XLA on the sharded env/sample axis.
+
+The bonus log q(z|a) is computed with the discriminator as it was when the batch was
+collected, then the discriminator is fitted to that batch during the same update: the
+paper's Algorithm 1 fits q first, which differs by one update of q.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any, Sequence
+
+import jax
+import jax.numpy as jnp
+import optax
+from brax.envs.base import Env
+from brax.training.acme import running_statistics
+from brax.training.agents.ppo.losses import compute_gae
+from flax import struct
+from jax.sharding import PartitionSpec as P
+
+from discosyn_jax.agent import networks, policy, ppo
+from discosyn_jax.agent.networks import DiscoSyn
+from discosyn_jax.config import TrainConfig
+from discosyn_jax.env import wrappers
+from discosyn_jax.synergies import diagnostics
+from discosyn_jax.training import devices as devices_lib
+from discosyn_jax.training import evaluation
+
+
+@struct.dataclass
+class TrainState:
+  params: Any
+  opt_state: Any
+  normalizers: tuple  # running_statistics state per task
+  env_states: tuple  # batched brax State per task
+  rng: jax.Array  # uint32[2]
+  step: jax.Array  # int32: train steps done
+
+
+class Trainer:
+  """Builds the module, the optimiser and the jitted functions for one config.
+
+  `envs`, one per task of the config, are built by the caller (`tasks.trainer(config)` for
+  the registered tasks): any Brax-style env with `episode_length`, a `success` metric and
+  actions in [-1, 1] works (the tests use a tiny one). `devices`
+  (a list, a count, or None for all) holds the mesh the env batch is split over.
+  """
+
+  def __init__(self, config: TrainConfig, envs: Sequence[Env], devices=None):
+    self.config = config.validate()
+    self.mesh = devices_lib.mesh_for(config, devices)
+    self.envs = list(envs)
+    if len(self.envs) != len(config.tasks):
+      raise ValueError(f"{len(self.envs)} envs given for {len(config.tasks)} tasks")
+    sizes = {env.action_size for env in self.envs}
+    if len(sizes) != 1:
+      raise ValueError(f"the tasks' action sizes differ: {sorted(sizes)}")
+    self.action_size = sizes.pop()
+    self.obs_sizes = tuple(env.observation_size for env in self.envs)
+    self.model = networks.build(config, self.obs_sizes, self.action_size)
+    self.optimizer = ppo.optimizer(config)
+    self._train = [wrappers.for_training(env, config.reset_pool) for env in self.envs]
+    self.eval_envs = [wrappers.for_evaluation(env) for env in self.envs]  # evaluate.py
+    self._fresh_state = jax.jit(self._initial_state)
+    self._fresh_params = jax.jit(self._init_params)
+    # the span the tasks plant, if they do (tasks/planted.py): what the decoder should find
+    self.planted_span = diagnostics.union_span(
+        [env.planted_span for env in self.envs if getattr(env, "planted_span", None) is not None])
+    # the decoder's movement from a reference (diagnostics.py); None without a decoder
+    self.decoder_drift = (jax.jit(functools.partial(diagnostics.decoder_drift, self.model,
+                                                    planted=self.planted_span))
+                          if self.model.has_discriminator else None)
+    self.train_step = jax.jit(self._train_step, donate_argnums=0)
+    # the deterministic policy's evaluation, and its episodes of one task (evaluation.py)
+    self.evaluate = jax.jit(functools.partial(evaluation.returns, self))
+    self.episodes = jax.jit(functools.partial(evaluation.episodes, self),
+                            static_argnames=("task", "episodes", "keep_states"))
+
+  # -- state -----------------------------------------------------------------
+  def init(self, seed: int | None = None, decoder_params=None) -> TrainState:
+    """A fresh state; `decoder_params` replace the initial decoder (a fitted or learned
+    synergy space: the host side loads it, see `synergies.load_decoder`)."""
+    key = jax.random.PRNGKey(self.config.seed if seed is None else seed)
+    # one jitted function: MJX run op by op (eagerly) takes minutes per reset
+    state = self._fresh_state(key, decoder_params)
+    return jax.device_put(state, self.state_shardings(state))
+
+  def initial_params(self, seed: int | None = None, decoder_params=None):
+    """The parameters `init(seed, decoder_params)` starts from, without building envs."""
+    key = jax.random.PRNGKey(self.config.seed if seed is None else seed)
+    params = self._fresh_params(self._split(key)[1])
+    return params if decoder_params is None else _with_decoder(params, decoder_params)
+
+  def _split(self, key):
+    return networks.split_seed_key(key, len(self.envs))
+
+  def _init_params(self, key):
+    return self.model.init(key, [jnp.zeros((1, s)) for s in self.obs_sizes])
+
+  def _initial_state(self, key, decoder_params) -> TrainState:
+    key, init_key, env_keys = self._split(key)
+    params = self._init_params(init_key)
+    if decoder_params is not None:
+      params = _with_decoder(params, decoder_params)
+    envs = tuple(env.reset(jax.random.split(k, self.config.num_envs))
+                 for env, k in zip(self._train, env_keys))
+    norms = tuple(running_statistics.init_state(jnp.zeros((s,))) for s in self.obs_sizes)
+    # every leaf an array of the dtype train_step returns: one compiled signature, one
+    # checkpoint layout
+    state = TrainState(params=params, opt_state=self.optimizer.init(params), normalizers=norms,
+                       env_states=envs, rng=key, step=jnp.zeros((), jnp.int32))
+    return jax.tree.map(lambda x: jnp.asarray(x, dtype=jnp.asarray(x).dtype), state)
+
+  def state_shardings(self, state: TrainState):
+    """Env states split over the mesh on their env axis; everything else replicated (and
+    empty arrays, e.g. a scene without sensors, which XLA always returns replicated)."""
+    replicated, batched = devices_lib.replicated(self.mesh), devices_lib.batched(self.mesh)
+    return state.replace(
+        **{f: jax.tree.map(lambda _: replicated, getattr(state, f))
+           for f in ("params", "opt_state", "normalizers", "rng", "step")},
+        env_states=jax.tree.map(lambda x: batched if x.size else replicated, state.env_states))
+
+  # -- acting ----------------------------------------------------------------
+  def normalize(self, obs, norm):
+    if not self.config.normalize_observations:
+      return obs
+    return running_statistics.normalize(obs, norm, max_abs_value=10.0)
+
+  def act(self, params, task: int, obs, key=None):
+    """(z, a, log pi(z, a | s)) for normalised `obs`; the means (and no log-prob) when
+    `key` is None."""
+    if key is None:
+      return (*policy.deterministic(self.model, params, task, obs), None)
+    return policy.sample(self.model, params, task, obs, self._noise(key, obs.shape[0]))
+
+  def _noise(self, key, batch: int):
+    return policy.noise(key, batch, self.model.n_synergies, self.action_size)
+
+  def _unroll(self, params, norm, env_state, key, task: int):
+    """`unroll_length` steps of every env: under shard_map, each device its own envs."""
+    env = self._train[task]
+    keys = jax.random.split(key, self.config.unroll_length)
+    noise = jax.vmap(lambda k: self._noise(k, self.config.num_envs))(keys)  # (T, B, ...)
+    envs, time_envs = P(devices_lib.AXIS), P(None, devices_lib.AXIS)
+    local = jax.shard_map(lambda *args: self._local_unroll(env, task, *args), mesh=self.mesh,
+                          in_specs=(P(), P(), envs, time_envs),
+                          out_specs=(envs, time_envs), check_vma=False)
+    return local(params, norm, env_state, noise)
+
+  def _local_unroll(self, env, task: int, params, norm, env_state, noise):
+
+    def step(env_state, noise):
+      obs = env_state.obs
+      z, a, log_prob = policy.sample(self.model, params, task, self.normalize(obs, norm), noise)
+      env_state = env.step(env_state, a)
+      info = env_state.info
+      out = dict(obs=obs, z=z, action=a, log_prob=log_prob, reward=env_state.reward,
+                 done=env_state.done, truncation=info["truncation"],
+                 episode_return=info["episode_metrics"]["sum_reward"],
+                 metrics=env_state.metrics)
+      return env_state, out
+
+    return jax.lax.scan(step, env_state, noise)
+
+  # -- the training step -----------------------------------------------------
+  def _train_step(self, state: TrainState):
+    cfg = self.config
+    rng, update_key, *task_keys = jax.random.split(state.rng, 2 + len(self.envs))
+    params = state.params
+    env_states, norms, samples, metrics = [], [], [], {}
+    for n, name in enumerate(cfg.tasks):
+      env_state, traj = self._unroll(params, state.normalizers[n], state.env_states[n],
+                                     task_keys[n], n)
+      norm = state.normalizers[n]
+      if cfg.normalize_observations:
+        norm = running_statistics.update(norm, traj["obs"].reshape(-1, traj["obs"].shape[-1]))
+      obs = self.normalize(traj["obs"], norm)
+      reward = traj["reward"] * cfg.reward_scaling
+      log_q = jnp.zeros_like(reward)
+      if self.model.has_discriminator:
+        log_q = ppo.discriminator_log_prob(self.model, params, traj["z"], traj["action"])
+        reward = reward + cfg.alpha2 * log_q
+      value = self.model.apply(params, n, obs, method=DiscoSyn.value)
+      bootstrap = self.model.apply(params, n, self.normalize(env_state.obs, norm),
+                                   method=DiscoSyn.value)
+      target, advantage = gae(reward, value, bootstrap, traj["done"], traj["truncation"], cfg)
+      flat = lambda x: x.reshape((-1,) + x.shape[2:])
+      samples.append(ppo.Samples(obs=flat(obs), z=flat(traj["z"]), action=flat(traj["action"]),
+                                 log_prob=flat(traj["log_prob"]), advantage=flat(advantage),
+                                 target=flat(target)))
+      env_states.append(env_state)
+      norms.append(norm)
+      metrics.update({f"{name}/{k}": v for k, v in _episode_metrics(traj, log_q, cfg.alpha2).items()})
+
+    params, opt_state, loss_metrics = self._update(params, state.opt_state, samples, update_key)
+    for n, name in enumerate(cfg.tasks):
+      metrics.update({f"{name}/{k}": v for k, v in loss_metrics["tasks"][n].items()})
+    metrics.update(loss_metrics["shared"])
+    finite = jnp.isfinite(loss_metrics["shared"]["loss"])
+    for leaf in jax.tree.leaves(params):
+      finite &= jnp.isfinite(leaf).all()
+    metrics["finite"] = finite
+    new = TrainState(params=params, opt_state=opt_state, normalizers=tuple(norms),
+                     env_states=tuple(env_states), rng=rng, step=state.step + 1)
+    # pin the layout of the returned state to the one it came in with (donation, next step)
+    new = jax.lax.with_sharding_constraint(new, self.state_shardings(new))
+    metrics = jax.lax.with_sharding_constraint(metrics, devices_lib.replicated(self.mesh))
+    return new, metrics
+
+  def _update(self, params, opt_state, samples: list[ppo.Samples], key):
+    """`update_epochs` passes of `num_minibatches` optimiser steps over every task's samples."""
+    cfg = self.config
+    grad_fn = jax.grad(ppo.loss, has_aux=True)
+
+    def minibatch_step(carry, batch):
+      params, opt_state = carry
+      grads, (per_task, shared) = grad_fn(params, self.model, batch, cfg)
+      updates, opt_state = self.optimizer.update(grads, opt_state, params)
+      shared = dict(shared, grad_norm=optax.tree.norm(grads), **_grad_norms_by_role(grads))
+      return (optax.apply_updates(params, updates), opt_state), {"tasks": per_task, "shared": shared}
+
+    def epoch(carry, key):
+      keys = jax.random.split(key, len(samples))
+
+      def shuffle(s, k):
+        perm = jax.random.permutation(k, s.obs.shape[0])
+        batches = jax.tree.map(
+            lambda x: x[perm].reshape((cfg.num_minibatches, -1) + x.shape[1:]), s)
+        # every minibatch split over the devices: each computes its share of the gradient
+        return jax.lax.with_sharding_constraint(batches, devices_lib.batched(self.mesh, 1))
+
+      batches = [shuffle(s, k) for s, k in zip(samples, keys)]
+      return jax.lax.scan(minibatch_step, carry, batches)
+
+    (params, opt_state), metrics = jax.lax.scan(
+        epoch, (params, opt_state), jax.random.split(key, cfg.update_epochs))
+    return params, opt_state, jax.tree.map(jnp.mean, metrics)
+
+def gae(reward, value, bootstrap, done, truncation, config: TrainConfig):
+  """(value targets, advantages) of a (T, B) rollout, by brax's compute_gae. An episode
+  ends (`done`) by termination, with nothing after it, or by truncation at the time limit:
+  the auto-reset has already put the next episode's first observation after that step, so
+  brax leaves it out (advantage 0, target its own value)."""
+  termination = done * (1 - truncation)
+  return compute_gae(truncation=truncation, termination=termination, rewards=reward,
+                     values=value, bootstrap_value=bootstrap, lambda_=config.gae_lambda,
+                     discount=config.discount)
+
+
+def _episode_metrics(traj, log_q, alpha2) -> dict[str, jax.Array]:
+  """Per-task figures of one rollout: episodes that ended in it, and per-step means; `reward`
+  is the env's reward, `bonus` the alpha2 log q(z|a) added to it (after reward_scaling)."""
+  done = traj["done"]
+  episodes = done.sum()
+  per_episode = lambda x: (x * done).sum() / jnp.maximum(episodes, 1)
+  m = traj["metrics"]
+  # the first control step of the rollout at which some env was paid anything (unroll_length
+  # if none): how long a sparse reward takes to be seen
+  paid = (traj["reward"] != 0).any(axis=1)
+  first_paid = jnp.where(paid.any(), jnp.argmax(paid), paid.shape[0])
+  out = {"episodes": episodes, "return": per_episode(traj["episode_return"]),
+         "success": per_episode(m["success"]), "diverged": m["diverged"].sum(),
+         "reward": traj["reward"].mean(), "first_reward_t": first_paid, "log_q": log_q.mean(),
+         "bonus": alpha2 * log_q.mean()}
+  out.update({k: v.mean() for k, v in m.items() if k.startswith("reward/")})
+  return out
+
+
+def _grad_norms_by_role(grads) -> dict[str, jax.Array]:
+  """The loss gradient's norm per part of the module (before clipping): the heads (policy
+  means and stds), the value heads, the decoder, the discriminator."""
+  parts: dict[str, list] = {}
+  for name, sub in grads["params"].items():
+    parts.setdefault(networks.role(name), []).append(sub)
+  return {f"grad_norm/{part}": optax.tree.norm(subs) for part, subs in parts.items()}
+
+
+def _with_decoder(params, decoder_params):
+  inner = dict(params["params"])
+  if "synergy_decoder" not in inner:
+    raise ValueError("this model has no synergy decoder to replace (identity decoder)")
+  want = jax.tree.map(jnp.shape, inner["synergy_decoder"])
+  got = jax.tree.map(jnp.shape, decoder_params)
+  if want != got:
+    raise ValueError(f"the given decoder does not fit this model: {got} != {want}")
+  inner["synergy_decoder"] = decoder_params
+  return {**params, "params": inner}
+

@@ -1,0 +1,2 @@
+"""Pictures: training curves, policy videos, the hand along each synergy, offscreen
+rendering."""
