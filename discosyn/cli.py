@@ -15,11 +15,19 @@ import threading
 from discosyn import commands
 
 
+class _Parser(argparse.ArgumentParser):
+  """Bad input is one line (which flag, what is wrong), exit status 2: argparse's own also
+  printed the command's whole usage; `--help` shows it."""
+
+  def error(self, message: str):
+    self.exit(2, f"{self.prog}: error: {message}\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
   from discosyn_jax import config as config_lib
   from experiments import presets  # TrainConfig only, no JAX
 
-  parser = argparse.ArgumentParser(prog="discosyn", description=__doc__)
+  parser = _Parser(prog="discosyn", description=__doc__)
   sub = parser.add_subparsers(dest="command", required=True)
   quick = presets.PRESETS["quickstart"]
 

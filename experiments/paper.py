@@ -104,7 +104,12 @@ class Train:
     resume = (run_dir / layout.CONFIG_FILE).is_file()
     loop.train(self.config, run_dir, make_trainer=make_trainer, resume=resume,
                progress=progress, log=log)
-    (run_dir / layout.EXPERIMENT_FILE).write_text(json.dumps(self.meta, indent=1))
+    self.label(out)
+
+  def label(self, out: pathlib.Path) -> None:
+    """Write the run's experiment.json: what `discosyn report` reads of it (also for a run of
+    the same config that `discosyn train` made in this folder)."""
+    (out / self.name / layout.EXPERIMENT_FILE).write_text(json.dumps(self.meta, indent=1))
 
 
 @dataclasses.dataclass
@@ -322,7 +327,8 @@ class Planner:
       # prior's; on the test bed the paper's and the decayed variant (measured to work there)
       kinds = ((("linear", ""), ("mlp", ""), ("linear", presets.DECAYED))
                if task_set in presets.DECAYED_SETS else
-               (("linear", presets.PAPER), ("mlp", ""), ("linear", presets.PRIORED)))
+               (("linear", presets.PAPER), ("mlp", ""), ("linear", presets.PRIORED),
+                ("linear", presets.REWARDED)))
       runs = [self.discosyn(task_set, b, kind, variant) for b in DISCOSYN_SIZES[task_set]
               for kind, variant in kinds]
       steps = [step for run in runs for step in (run, *self.controls(run, task_set, experiment))]
@@ -388,6 +394,8 @@ def run(experiment: str, out: pathlib.Path, scale: str, seeds=None, *,
       folders.append(out / step.name)
       if step.done(out):
         log(f"[{step.name}] done already; kept")
+        if isinstance(step, Train) and not (out / step.name / layout.EXPERIMENT_FILE).is_file():
+          step.label(out)
         continue
       log(f"[{step.name}] {type(step).__name__.lower()}")
       step.run(out, make_trainer, progress, log)

@@ -4,6 +4,8 @@ import argparse
 import subprocess
 import sys
 
+import pytest
+
 from discosyn import cli, commands
 from discosyn_jax import config as config_lib
 from experiments import presets
@@ -94,3 +96,17 @@ def test_the_train_flags_help_is_their_fields_own_documentation():
   helps = {a.dest: a.help for a in subcommands(cli.build_parser())["train"]._actions}
   for flag, field in commands.TRAIN_FLAGS.items():
     assert docs[field] and helps[flag].startswith(docs[field] + "; default: the preset's"), flag
+
+
+@pytest.mark.parametrize("argv, line", [
+    (["train", "--decoder-init", "bogus"], "discosyn train: error: argument --decoder-init: "
+     "invalid choice: 'bogus' (choose from 'random', 'physics', 'reward')"),
+    (["train", "--steps", "x"], "discosyn train: error: argument --steps: invalid int value: 'x'"),
+    (["bogus"], "discosyn: error: argument command: invalid choice: 'bogus'"),
+])
+def test_a_bad_flag_is_one_line_and_exit_status_2(argv, line, capsys):
+  with pytest.raises(SystemExit) as ended:
+    cli.main(argv)
+  assert ended.value.code == 2
+  (err,) = capsys.readouterr().err.splitlines()
+  assert err.startswith(line), err

@@ -13,7 +13,7 @@ from sklearn.decomposition import PCA
 from discosyn import cli, commands
 from discosyn_jax.agent import networks
 from discosyn_jax.config import TrainConfig
-from discosyn_jax.run import checkpoints, logs, reading
+from discosyn_jax.run import checkpoints, layout, logs, reading
 from discosyn_jax.synergies import fitting
 from discosyn_jax.training import loop
 from discosyn_jax.training.train import Trainer, _episode_metrics
@@ -214,6 +214,13 @@ def test_finished_steps_are_kept(experiments):
             log=logs.append)
   assert final.stat().st_mtime_ns == before
   assert all("done already" in line for line in logs)
+  # a finished run of the same config that `discosyn train` made there is kept, and labelled
+  label = experiments / "pca4-set1-seed0" / layout.EXPERIMENT_FILE
+  meta = label.read_text()
+  label.unlink()
+  paper.run("baselines-set1", experiments, "ci", make_trainer=make_trainer, task_sets=SETS,
+            log=lambda *a: None)
+  assert final.stat().st_mtime_ns == before and label.read_text() == meta
   # another scale asks for another config: the finished run is not silently replaced
   with pytest.raises(ValueError, match="does not match"):
     paper.run("baselines-set1", experiments, "cpu", make_trainer=make_trainer, task_sets=SETS,

@@ -1,6 +1,6 @@
-"""The physics prior (discosyn_jax/synergies/physics_prior.py): the action directions that move the
-objects most, the same for every seed; each seed's decoder starts in that subspace with its
-own scale and bias."""
+"""The priors (discosyn_jax/synergies/physics_prior.py): the action directions that move the
+objects most, or that change what each task rewards, the same for every seed; each seed's
+decoder starts in that subspace with its own scale and bias."""
 
 import numpy as np
 import pytest
@@ -70,9 +70,14 @@ def test_every_seed_of_a_run_starts_in_the_same_subspace_and_only_there():
 
 
 def test_the_prior_is_refused_where_it_cannot_start_the_decoder():
-  config = presets.preset("set1-disco3-linear")
+  config = presets.preset("set1-disco3-linear-prior")
   assert fitting.method_name(config) == "DiscoSyn3-L-prior"
   assert fitting.method_name(config.replace(freeze_decoder=True)) == "Prior3-L"
+  default = presets.preset("set1-disco3-linear")  # the reward prior, every linear preset's start
+  assert {presets.preset(f"set{n}-disco{b}-linear").decoder_init
+          for n, b in ((1, 3), (1, 4), (2, 4), (2, 6))} == {"reward"}
+  assert fitting.method_name(default) == "DiscoSyn3-L-reward"
+  assert fitting.method_name(default.replace(freeze_decoder=True)) == "Prior3-L-reward"
   for bad in (dict(decoder="mlp"), dict(decoder_from="x.npz"), dict(decoder_init="pca")):
     with pytest.raises(ValueError):
       config.replace(**bad).validate()
