@@ -29,7 +29,7 @@ def valve3():
 
 
 def test_the_prior_is_the_directions_that_move_the_object_most(valve3):
-  jac = physics_prior.object_jacobians(valve3)
+  jac = physics_prior.jacobians(valve3, "objects")
   assert jac.shape == (16, 1, 20) and np.isfinite(jac).all()
   assert np.abs(jac).max() > 0  # some push moved the valve
   basis = physics_prior.basis([valve3], 3)
@@ -88,9 +88,9 @@ def test_the_prior_is_refused_where_it_cannot_start_the_decoder():
 
 def test_chunking_the_pushes_changes_nothing(valve3, monkeypatch):
   """The pushes go through lax.map in chunks (MJX memory): chunking changes nothing."""
-  whole = physics_prior.object_jacobians(valve3)
+  whole = physics_prior.jacobians(valve3, "objects")
   monkeypatch.setattr(physics_prior, "CHUNK", 3)
-  np.testing.assert_allclose(physics_prior.object_jacobians(valve3), whole, atol=1e-6)
+  np.testing.assert_allclose(physics_prior.jacobians(valve3, "objects"), whole, atol=1e-6)
 
 
 _PLANTED = """<mujoco><worldbody>

@@ -1,11 +1,13 @@
-"""A synergy prior from the physics: the action directions that move the task objects most,
-pooled over the task set (a tie-breaker; docs/TRAINING_NOTES.md has its runs).
+"""Synergy priors from the physics: the action directions that matter most to the task set,
+the same for every seed (a tie-breaker; docs/TRAINING_NOTES.md has its runs).
 
 For each env: states of a uniform random policy (a fixed seed, never the run's); at each,
-every action pushed by +-DELTA for one control step, and the objects' velocities after it
-(the qvel of every joint that is not the hand's) differenced into a Jacobian J (object dofs
-x actions). M_env = the sum over states of J^T J, scaled to trace 1 so that each task counts
-alike; the prior basis is the top-b eigenvectors of their sum. It depends on the tasks, the
+every action pushed by +-DELTA for one control step, and the step's outcome differenced into
+a Jacobian J (outputs x actions). The outcome (`response`) is either the velocity of every
+object dof (the joints that are not the hand's) or the task's reward of the step. M_env =
+the sum over states of J^T J, scaled to trace 1 so that each task counts alike (`metric`);
+the tasks' metrics make b directions (`pool`: the top-b of their sum, or each task its share
+in turns). The priors a config names are config.PRIORS. A prior depends on the tasks, the
 hand and the physics, never on a training seed, so every seed's decoder starts in the same
 subspace (`start`: each keeps its own random scale, bias and noise).
 """
@@ -86,11 +88,6 @@ def jacobians(env, response: str = "objects") -> np.ndarray:
   states, actions = collect(jax.random.PRNGKey(SEED))
   return np.asarray(jax.jit(lambda s, a: jax.lax.map(jacobian, (s, a), batch_size=CHUNK))(
       states, actions))
-
-
-def object_jacobians(env) -> np.ndarray:
-  """(states, object dofs, actions) of one hand env (module docstring)."""
-  return jacobians(env, "objects")
 
 
 def metric(env, response: str = "objects") -> np.ndarray:
