@@ -212,6 +212,8 @@ def _stopper(exception_type):
 
 
 def main(argv: list[str] | None = None) -> int:
+  from discosyn_jax.run import stop  # light: no JAX
+
   args = build_parser().parse_args(argv)
   # a handler only the main thread may set (a notebook may call main from another)
   main_thread = threading.current_thread() is threading.main_thread()
@@ -223,8 +225,6 @@ def main(argv: list[str] | None = None) -> int:
   try:
     return _run(args)
   except BaseException as err:
-    from discosyn_jax.run import stop
-
     stopped = stop.taken(err)  # Ctrl-C or SIGTERM, wherever it landed: one line
     if stopped is None:
       raise
@@ -241,8 +241,7 @@ def main(argv: list[str] | None = None) -> int:
       gc.enable()
     for sig, handler in previous.items():  # (None: set outside Python, cannot be set back)
       signal.signal(sig, signal.SIG_DFL if handler is None else handler)
-    if "discosyn_jax.run.stop" in sys.modules:
-      sys.modules["discosyn_jax.run.stop"].reset()
+    stop.reset()
 
 
 def _quiet_end() -> None:
