@@ -79,3 +79,40 @@ def test_register_gives_a_short_name_and_refuses_a_second_task_under_it(monkeypa
   with pytest.raises(ValueError, match="a task named 'valve0' is registered already"):
     tasks.register("valve0", knob)
   assert tasks.label(spec) == "Knob" and tasks.label("valve0") == "valve0"
+
+
+OWN_SET = EXAMPLE.parent / "own_set" / "own_set.py"
+
+
+def _hold(env, **actions):
+  """A policy holding every finger straight (J1 at its limit), the other joints mid-range,
+  and these actuators at these actions: a deliberate motion of the example's tasks."""
+  import jax.numpy as jnp
+  import numpy as np
+
+  from discosyn_jax.env import hands
+
+  names = [a.removeprefix("A_") for a in hands.actuators("shadow20")]
+  action = np.where([n.endswith(("J1", "J2")) for n in names], -1.0, 0.0)
+  for joint, value in actions.items():
+    for finger in ("FF", "MF", "RF", "LF"):
+      action[names.index(finger + joint)] = value
+  return lambda t, key, batch: jnp.broadcast_to(jnp.asarray(action, jnp.float32), (batch, env.action_size))
+
+
+@pytest.mark.parametrize("cls, deliberate, success", [
+    ("Press", dict(J2=0.4), 1.0),  # fingers bent at the knuckles: the button held down
+    ("Rake", dict(J2=1.0, J1=1.0), 0.1)])  # fingers curled back over the puck
+def test_the_own_task_set_is_solved_by_a_deliberate_motion_not_by_chance(cls, deliberate, success):
+  """The example task set (docs/examples/own_set/) is well posed: a deliberate motion
+  succeeds where a uniform random policy rarely does (docs/YOUR_TASK.md has the figures)."""
+  import jax
+
+  from discosyn_jax.env import rollouts
+
+  env = tasks.make(tasks.load(f"{OWN_SET}:{cls}"), backend="native")
+  keys = jax.random.split(jax.random.PRNGKey(0), 32)
+  uniform = lambda t, key, batch: jax.random.uniform(key, (batch, env.action_size), minval=-1, maxval=1)
+  chance = float(rollouts.run_episode(env, keys, uniform)[1].metrics["success"][-1].mean())
+  done = float(rollouts.run_episode(env, keys[:8], _hold(env, **deliberate))[1].metrics["success"][-1].mean())
+  assert chance <= 0.15 and done >= success and done > chance

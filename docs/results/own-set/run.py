@@ -1,0 +1,33 @@
+"""A task set of one's own (docs/examples/own_set/: press a button, rake a puck) from the
+default start, beside its strongest control, as a researcher would run them from Python.
+
+  python docs/results/own-set/run.py {default,zfree} SEED OUT_DIR
+
+default: DiscoSyn3-L-reward (the linear DiscoSyn preset's start: the reward prior, z
+bounded); zfree: Random3-L-zfree (a frozen random decoder, z free: the strongest control on
+the hand's sets). Both at the `cpu` scale's sizes (768 k env steps for two tasks).
+"""
+
+import pathlib
+import sys
+
+import tasks
+from discosyn_jax.training import loop
+from experiments import paper, presets
+
+HERE = pathlib.Path(__file__).resolve().parent
+FILE = HERE.parents[1] / "examples" / "own_set" / "own_set.py"
+
+
+def config(method: str, seed: int):
+  names = tuple(tasks.load(f"{FILE}:{name}") for name in ("Press", "Rake"))
+  base = presets.preset("set1-disco3-linear").replace(tasks=names, seed=seed,
+                                                      **paper.SCALES["cpu"].train)
+  if method == "zfree":
+    base = base.replace(freeze_decoder=True, squash_z=False, decoder_init="random")
+  return base.validate()
+
+
+if __name__ == "__main__":
+  method, seed, out = sys.argv[1], int(sys.argv[2]), pathlib.Path(sys.argv[3])
+  loop.train(config(method, seed), out, make_trainer=tasks.trainer, progress=False)
