@@ -1,5 +1,5 @@
-"""The `discosyn` command: train, eval, synergies, render, experiment, report, bench, demo,
-tasks, render-scenes, upgrade; its flags, and how it ends (one line and exit 2 for bad input,
+"""The `discosyn` command: train, eval, synergies, render, experiment, keep, report, bench,
+demo, tasks, render-scenes, upgrade; its flags, and how it ends (one line and exit 2 for bad input,
 128 + the signal for Ctrl-C / SIGTERM). The commands themselves are in commands.py."""
 
 from __future__ import annotations
@@ -100,11 +100,24 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("--force", action="store_true", help="replace the file if it exists")
   p.set_defaults(fn=commands.cmd_render)
 
-  p = sub.add_parser("experiment", help="run one of the paper's experiments, or all, at a scale "
-                     "(experiments/paper.py); finished steps are kept, unfinished ones resumed")
-  p.add_argument("name", help="discosyn-set1 | discosyn-set2 | baselines-set1 | baselines-set2 | "
-                 "transfer | sparse | all; the planted-synergy test bed: discosyn-planted | "
-                 "discosyn-planted_slack")
+  p = sub.add_parser(
+      "experiment", help="run one of the paper's experiments, or all, at a scale "
+      "(experiments/paper.py); finished steps are kept, unfinished ones resumed",
+      description="Run one of the paper's experiments at a scale, a folder per step in --out. "
+      "A step whose folder holds a finished run of the same config is kept: its final "
+      "checkpoint, or its record alone (config.json, eval.jsonl, experiment.json, "
+      "metrics.jsonl.xz, decoder.npz, z.npz: what `discosyn keep` copies), so that a folder "
+      "of records (docs/results/...) is continued, not retrained; an unfinished step is "
+      "resumed. Every run ends by writing its record, and a later step reads the records of "
+      "those before it (a matched or transferred decoder its decoder.npz, a fitted space its "
+      "synergy file; only a fit rolls out its PPO run's checkpoint); `discosyn report` needs "
+      "no checkpoint.")
+  p.add_argument("name", help="all: the rows of the paper's tables with today's defaults "
+                 "(paper.PAPER_ROWS: set #1's DiscoSyn, its controls and the baselines, then "
+                 "the sparse valve and transfer from each seed's default decoder, set #2 last); "
+                 "discosyn-set1 | discosyn-set2 (every start and control tried) | "
+                 "baselines-set1 | baselines-set2 | transfer | sparse; the planted-synergy "
+                 "test bed: discosyn-planted | discosyn-planted_slack")
   p.add_argument("--scale", default="cpu", help="ci (seconds per run) | cpu (minutes per run on "
                  "2 cores) | gpu (one accelerator); default: %(default)s")
   p.add_argument("--seeds", type=int, nargs="+",
@@ -120,6 +133,20 @@ def build_parser() -> argparse.ArgumentParser:
   add_hand_flag(p, "every run on this hand; folders end in <hand>-seed<n> on another than ours")
   p.add_argument("--progress", action="store_true", help="a progress bar per run")
   p.set_defaults(fn=commands.cmd_experiment)
+
+  p = sub.add_parser("keep", help="copy the record of every finished run, fit and matched "
+                     "decoder of an experiment's folder into another (to commit it)",
+                     description="Copy into DEST/<folder> the record of every step folder of "
+                     "OUT: a finished run's config.json, eval.jsonl, experiment.json, "
+                     "metrics.jsonl.xz and, where it has them, decoder.npz and z.npz; a fit's "
+                     "explained_variance.json and synergy files; a matched control's "
+                     "decoder.npz. Checkpoints, TensorBoard files, plots and metrics.jsonl are "
+                     "left out: `discosyn experiment` continues and `discosyn report` reports "
+                     "from the records alone. A run without a record (unfinished) is named "
+                     "and left out.")
+  p.add_argument("out", help="an experiment's folder (the --out of `discosyn experiment`)")
+  p.add_argument("dest", help="the folder to copy the records into (e.g. docs/results/NAME)")
+  p.set_defaults(fn=commands.cmd_keep)
 
   p = sub.add_parser("report", help="REPORT.md and figures from run folders: solved tasks, "
                      "explained variance, curves, t-SNE, transfer, sparse reward")

@@ -248,6 +248,13 @@ def cmd_experiment(args) -> None:
   print(f"experiment {args.name} finished in {(time.perf_counter() - start) / 60:.1f} min")
 
 
+def cmd_keep(args) -> None:
+  from experiments import record
+
+  for folder in record.keep(pathlib.Path(args.out), pathlib.Path(args.dest)):
+    print(folder)
+
+
 def cmd_upgrade(args) -> None:
   from discosyn_jax import config as config_lib
   from discosyn_jax.run import owner, reading

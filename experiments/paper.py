@@ -16,17 +16,25 @@
                          its deterministic actions collected, PCA and an autoencoder fitted
                          for k = 3, 4, 6, then policies trained in the frozen PCA4, AE4, PCA6,
                          AE6 spaces (a = the decoder's mean, no noise outside the space)
-  transfer               unseen tasks with a frozen DiscoSyn decoder (set #1's DiscoSyn3-L
-                         for the two valves, set #2's DiscoSyn6-L for the top-down screw),
-                         beside full-action PPO from scratch on the same tasks and budget
-  sparse                 the sparse goal valve: frozen set-#1 synergies, a frozen random
-                         decoder of the same size (z bounded, and z free), full-action PPO
-  all                    every one of them
+  transfer               unseen tasks with a frozen DiscoSyn decoder, each seed's default
+                         (set #1's DiscoSyn3-L-reward for the two valves, set #2's
+                         DiscoSyn6-L-reward for the top-down screw), beside full-action PPO
+                         from scratch on the same tasks and budget
+  sparse                 the sparse goal valve: frozen set-#1 synergies (the same decoder), a
+                         frozen random decoder of the same size (z bounded, and z free),
+                         full-action PPO
+  all                    the paper's rows with today's defaults (PAPER_ROWS, not every start
+                         and control discosyn-<set> tries): set #1's rows, the sparse valve,
+                         transfer, set #2's rows (last: its runs are the long ones)
 
 Every step writes into its own folder of OUT (`<method>-<set>-seed<n>`). A step whose folder
-holds a finished run of the same config is kept; an unfinished one is resumed, so an
-interrupted `all` is continued by running it again. Each run folder gets an
-`experiment.json` (experiment, method, set, seed, scale) that `discosyn report` reads.
+holds a finished run of the same config is kept, whether by its final checkpoint or by its
+record alone (experiments/record.py: what a run ends by writing, and what `discosyn keep`
+copies to be committed); an unfinished one is resumed, so an interrupted `all` is continued
+by running it again, in a fresh clone from the committed records too. A later step reads
+the records of those before it (decoder.npz, a fit's synergy files); only a fit reads a
+checkpoint (it rolls out its PPO run). Each run folder gets an `experiment.json`
+(experiment, method, set, seed, scale) that `discosyn report` reads.
 
 One file over 300 lines on purpose: the steps (Train, Fit, Match) and the plans built from
 them are read together, as the plan of an experiment is its list of steps.
@@ -45,10 +53,10 @@ import numpy as np
 import tasks
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import hands
-from discosyn_jax.run import layout, reading
+from discosyn_jax.run import layout
 from discosyn_jax.synergies import fitting
 from discosyn_jax.training import evaluation, loop
-from experiments import presets, report_runs
+from experiments import presets, record
 
 # the task sets of tasks/sets.py, the unseen tasks split by the set whose synergies they take
 TASK_SETS = {**{name: tasks.TASK_SETS[name] for name in ("set1", "set2", "sparse", "planted",
@@ -57,8 +65,23 @@ TASK_SETS = {**{name: tasks.TASK_SETS[name] for name in ("set1", "set2", "sparse
 DISCOSYN_SIZES = {"set1": (3, 4), "set2": (4, 6), "planted": (3,), "planted_slack": (3,)}
 BASELINES = (("PCA", 4), ("AE", 4), ("PCA", 6), ("AE", 6))  # trained in, as in the paper
 FITTED_SIZES = (3, 4, 6)  # explained variance reported for these
+# each seed's default decoder (the preset's start: the reward prior): the same run, in the
+# same folder, as that set's DiscoSyn<b>-L-reward row
 TRANSFER_FROM = {"unseen-set1": ("set1", 3, "linear"), "unseen-set2": ("set2", 6, "linear"),
                  "sparse": ("set1", 3, "linear")}
+# the rows of the paper's Tables I and II with today's defaults, what `all` runs of
+# discosyn-<set> and baselines-<set>: DiscoSyn from each set's default start (the paper's
+# DiscoSyn<b>-L is today's DiscoSyn<b>-L-reward), the controls it must beat (a random
+# decoder frozen, z bounded and z free; the prior's start frozen), the sequential baselines
+PAPER_ROWS = {
+    "set1": ("DiscoSyn3-L-reward", "DiscoSyn4-L-reward", "DiscoSyn3-NL", "DiscoSyn4-NL",
+             "Random3-L", "Random3-L-zfree", "Prior3-L-reward", "Random4-L", "Random4-L-zfree",
+             "Prior4-L-reward", "Random3-NL-zfree", "Random4-NL-zfree",
+             "PPO", "PCA4", "AE4", "PCA6", "AE6"),
+    "set2": ("DiscoSyn6-L-reward", "DiscoSyn4-L-reward", "DiscoSyn6-NL", "DiscoSyn4-NL",
+             "Random6-L", "Random6-L-zfree", "Prior6-L-reward",
+             "PPO", "PCA4", "AE4", "PCA6", "AE6"),
+}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -104,18 +127,30 @@ class Train:
   needs: tuple[str, ...] = ()  # the steps whose folders this one reads
 
   def done(self, out: pathlib.Path) -> bool:
-    return reading.finished(out / self.name, self.config)
+    """A finished run of this config: its final checkpoint, or its record alone."""
+    return record.finished(out / self.name, self.config)
 
   def run(self, out: pathlib.Path, make_trainer, progress: bool, log) -> None:
     run_dir = out / self.name
     resume = (run_dir / layout.CONFIG_FILE).is_file()
-    loop.train(self.config, run_dir, make_trainer=make_trainer, resume=resume,
-               progress=progress, log=log)
+    done = loop.train(self.config, run_dir, make_trainer=make_trainer, resume=resume,
+                      progress=progress, log=log)
     self.label(out)
+    record.write(run_dir, done["trainer"], done["state"])
+
+  def settle(self, out: pathlib.Path, make_trainer, log) -> None:
+    """Complete what a finished run lacks of its record: its experiment.json (a run of the
+    same config that `discosyn train` made in this folder), the files a run finished before
+    records were written lacks (from its final checkpoint)."""
+    run_dir = out / self.name
+    if not (run_dir / layout.EXPERIMENT_FILE).is_file():
+      self.label(out)
+    if not record.complete(run_dir, self.config):
+      log(f"[{self.name}] its record, from its final checkpoint")
+      record.write(run_dir, *loop.load_trained(run_dir / layout.FINAL, make_trainer))
 
   def label(self, out: pathlib.Path) -> None:
-    """Write the run's experiment.json: what `discosyn report` reads of it (also for a run of
-    the same config that `discosyn train` made in this folder)."""
+    """Write the run's experiment.json: what `discosyn report` reads of it."""
     (out / self.name / layout.EXPERIMENT_FILE).write_text(json.dumps(self.meta, indent=1))
 
 
@@ -134,7 +169,7 @@ class Fit:
     return (self.source,)
 
   def done(self, out: pathlib.Path) -> bool:
-    return (out / self.name / report_runs.FIT_FILE).is_file()
+    return (out / self.name / record.FIT_FILE).is_file()
 
   def run(self, out: pathlib.Path, make_trainer, progress: bool, log) -> None:
     trainer, state = loop.load_trained(out / self.source, make_trainer)
@@ -145,7 +180,7 @@ class Fit:
     actions = np.concatenate(list(per_task.values()))
     folder = out / self.name
     folder.mkdir(parents=True, exist_ok=True)
-    np.savez(folder / "actions.npz", **per_task)
+    np.savez(folder / record.ACTIONS_FILE, **per_task)
     variance: dict[str, Any] = {**self.meta, "samples": int(actions.shape[0]), "PCA": {}, "AE": {}}
     for k in FITTED_SIZES:
       if k > min(actions.shape):
@@ -162,7 +197,7 @@ class Fit:
         variance[method][str(k)] = ev
         log(f"{self.name}: {method}{k} explains {ev:.1%} of the action variance")
     # written last: its presence marks the step done
-    (folder / report_runs.FIT_FILE).write_text(json.dumps(variance, indent=1))
+    (folder / record.FIT_FILE).write_text(json.dumps(variance, indent=1))
 
 
 def fitted_meta(method: str, k: int, hidden: tuple[int, ...]) -> dict[str, Any]:
@@ -174,11 +209,12 @@ def fitted_meta(method: str, k: int, hidden: tuple[int, ...]) -> dict[str, Any]:
 @dataclasses.dataclass
 class Match:
   """Write the decoder of a `-matched` control: the random initial subspace of a linear
-  DiscoSyn run's seed carrying that run's learned singular values, bias and noise."""
+  DiscoSyn run's seed carrying that run's learned singular values, bias and noise (read
+  from the record of that run)."""
   name: str  # the folder of the synergy file in OUT
   source: str  # the DiscoSyn run's folder in OUT
   meta: dict[str, Any]
-  FILE = "decoder.npz"
+  FILE = layout.DECODER_FILE
 
   @property
   def needs(self) -> tuple[str, ...]:
@@ -190,8 +226,8 @@ class Match:
   def run(self, out: pathlib.Path, make_trainer, progress: bool, log) -> None:
     from discosyn_jax.agent import networks
 
-    config = reading.load_run(out / self.source)[0]
-    meta, learned = fitting.read(out / self.source)
+    config = record.saved_config(out / self.source)
+    meta, learned = fitting.read(out / self.source / layout.DECODER_FILE)
     start = networks.random_decoder(config, int(np.shape(learned["log_std"])[-1]))
     fitting.save(out / self.name / self.FILE, fitting.in_subspace_of(learned, start),
                    meta, source=self.source)
@@ -298,7 +334,8 @@ class Planner:
       source, path = None, self.decoder_from
     else:
       source = self.discosyn(source_set, b, kind)
-      meta, path = {k: getattr(source.config, k) for k in fitting.ARCHITECTURE}, self.out / source.name
+      meta = {k: getattr(source.config, k) for k in fitting.ARCHITECTURE}
+      path = self.out / source.name / layout.DECODER_FILE  # the record of its run
     method = fitting.method_name(meta)
     # folders: transfer-synergies-set1-seed0 (unseen tasks of set #1), sparse-synergies-seed0
     label = task_set.removeprefix("unseen-")
@@ -321,12 +358,15 @@ class Planner:
     return [step for step in (source, frozen, *controls, scratch) if step is not None]
 
   def plan(self, experiment: str) -> list:
-    if experiment == "all":
-      steps = []
-      for name in ("discosyn-set1", "baselines-set1", "sparse", "transfer", "discosyn-set2",
-                   "baselines-set2"):
-        steps += [s for s in self.plan(name) if s.name not in {t.name for t in steps}]
-      return steps
+    if experiment == "all":  # set #2 last: its runs are the long ones
+      parts = [select(self.plan("discosyn-set1") + self.plan("baselines-set1"),
+                      PAPER_ROWS["set1"]), self.plan("sparse"), self.plan("transfer"),
+               select(self.plan("discosyn-set2") + self.plan("baselines-set2"),
+                      PAPER_ROWS["set2"])]
+      steps: dict[str, Any] = {}  # a step parts share (the decoder transfer freezes) runs once
+      for step in (step for part in parts for step in part):
+        steps.setdefault(step.name, step)
+      return list(steps.values())
     if experiment.startswith("discosyn-") and experiment[9:] in DISCOSYN_SIZES:
       task_set = experiment[9:]
       # the decayed variant where it is measured to work (docs/TRAINING_NOTES.md)
@@ -401,8 +441,8 @@ def run(experiment: str, out: pathlib.Path, scale: str, seeds=None, *,
       folders.append(out / step.name)
       if step.done(out):
         log(f"[{step.name}] done already; kept")
-        if isinstance(step, Train) and not (out / step.name / layout.EXPERIMENT_FILE).is_file():
-          step.label(out)
+        if isinstance(step, Train):
+          step.settle(out, make_trainer, log)
         continue
       log(f"[{step.name}] {type(step).__name__.lower()}")
       step.run(out, make_trainer, progress, log)

@@ -11,12 +11,14 @@ Writes OUT/REPORT.md and PNG figures beside it:
 
 "Solved" is: the mean over seeds of the final evaluation's success >= `threshold`.
 A run's method and set come from its experiment.json (written by `discosyn experiment`), or
-else from its config.
+else from its config. It reads a run's record where its checkpoints are not kept
+(experiments/record.py). The text is the same wherever and whenever it is made from the
+same folders: no date, and the folders named relative to the report's own.
 """
 
 from __future__ import annotations
 
-import datetime
+import os
 import pathlib
 import re
 from typing import Any
@@ -25,6 +27,7 @@ import numpy as np
 
 from discosyn_jax.run import layout, logs
 from experiments import report_figures
+from experiments.presets import REWARDED
 from experiments.report_runs import Run, find, order
 from tasks import TASK_SETS
 
@@ -37,6 +40,14 @@ PAPER_SOLVED = {
              "DiscoSyn4-NL": "1111", "DiscoSyn6-L": "1111", "DiscoSyn6-NL": "1111"},
 }
 PAPER_PCA_VARIANCE = {"set1": {3: 0.415, 4: 0.508, 6: 0.628}}
+
+
+def paper_row(method: str) -> str:
+  """The paper's row a method stands for: its own name, and for today's default start of a
+  linear DiscoSyn (DiscoSyn3-L-reward) the paper's DiscoSyn3-L."""
+  return method.removesuffix(REWARDED) if method.startswith("DiscoSyn") else method
+
+
 # -- tables ---------------------------------------------------------------------
 def _success(runs: list[Run], task: str) -> np.ndarray:
   return np.array([r.final[f"{task}/success"] for r in runs if f"{task}/success" in r.final])
@@ -217,10 +228,11 @@ def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = Tr
   old_figures = set(_figures(report.read_text())) if report.exists() else set()
   out.mkdir(parents=True, exist_ok=True)
 
-  date = datetime.date.today().isoformat()
-  lines = [f"# DiscoSyn-JAX report ({date})", "",
+  # the folders relative to the report's own: the text names no path of this machine
+  sources = [os.path.relpath(pathlib.Path(p).resolve(), out.resolve()) for p in paths]
+  lines = ["# DiscoSyn-JAX report", "",
            f"{len(runs)} runs and {len(fits)} synergy fits from: "
-           + ", ".join(f"`{p}`" for p in paths) + ".",
+           + ", ".join(f"`{p}`" for p in sources) + " (relative to this report's folder).",
            f"A task is *solved* when the mean over seeds of the final deterministic evaluation's "
            f"success is at least {threshold:.0%}. Cells: mark, mean success, (min–max "
            "over seeds), [seeds], and the paper's mark (Tables I and II).", ""]

@@ -95,33 +95,25 @@ def overlap_curves(runs: list[Run], path: pathlib.Path, title: str) -> pathlib.P
   return _save(fig, axes, title, path)
 
 
-def tsne(run: Run, path: pathlib.Path, episodes: int = 8, points: int = 2000,
-         make_trainer=None) -> pathlib.Path:
-  """t-SNE of the z the deterministic policy picks on each task (the paper's Fig. 6)."""
-  import jax
+def tsne(run: Run, path: pathlib.Path, make_trainer=None) -> pathlib.Path:
+  """t-SNE of the z the deterministic policy picks on each task (the paper's Fig. 6): the
+  run's z samples (record.z_of: its z.npz, else drawn from its checkpoint)."""
   import matplotlib
 
   matplotlib.use("Agg")
   import matplotlib.pyplot as plt
   from sklearn.manifold import TSNE
 
-  import tasks
-  from discosyn_jax.training import evaluation, loop
+  from experiments import record
 
-  trainer, state = loop.load_trained(run.path, make_trainer or tasks.trainer)
-  rollouts = evaluation.rollouts(trainer, state.params, state.normalizers, jax.random.PRNGKey(0), episodes)
-  rng = np.random.default_rng(0)
-  zs, labels = [], []
-  for n, (task, traj) in enumerate(rollouts.items()):
-    z = np.asarray(traj["z"])[np.asarray(traj["alive"]) > 0]
-    keep = rng.permutation(len(z))[:points // len(rollouts)]
-    zs.append(z[keep])
-    labels += [n] * len(keep)
+  samples = record.z_of(run.path, make_trainer)
+  zs = [samples[task] for task in run.config.tasks]
+  labels = [n for n, z in enumerate(zs) for _ in range(len(z))]
   z = np.concatenate(zs)
   embedded = TSNE(n_components=2, perplexity=min(30.0, len(z) / 4), random_state=0).fit_transform(z)
   fig, ax = plt.subplots(figsize=(5, 4.5))
   labels = np.array(labels)
-  for n, task in enumerate(rollouts):
+  for n, task in enumerate(run.config.tasks):
     ax.scatter(*embedded[labels == n].T, s=4, label=task)
   ax.legend(markerscale=3, fontsize=8)
   ax.set_title(f"t-SNE of z: {run.method} on {run.task_set} (seed {run.seed})")

@@ -9,10 +9,10 @@ import json
 import pathlib
 from typing import Any
 
-from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import hands
 from discosyn_jax.run import layout, logs
+from experiments import record
 from experiments.presets import DECAY
 from tasks import TASK_SETS
 
@@ -23,7 +23,6 @@ for _b in (3, 4, 6):  # each DiscoSyn row (the paper's update, the decayed) abov
       ("DiscoSyn", ""), ("DiscoSyn", _DECAYED), ("Random", ""), ("Random", "-zfree"),
       ("Random", "-matched"), ("Random", f"-matched{_DECAYED}")))
 MAIN_EXPERIMENTS = ("discosyn", "baselines")
-FIT_FILE = "explained_variance.json"  # in a folder of synergy files: what the fits explain
 
 
 @dataclasses.dataclass
@@ -90,7 +89,7 @@ def _set_of(config: TrainConfig) -> str:
 def load_run(path: pathlib.Path) -> Run:
   from discosyn_jax.run import checkpoints, owner
 
-  config = config_lib.load(path / layout.CONFIG_FILE)
+  config = record.saved_config(path)  # its decoder_from found where the folder is now
   writer = owner.writer_of(path)
   if writer:  # its logs are read as far as they go now
     checkpoints.warn(f"{path} is being written by {writer}: read its logs as they are now")
@@ -119,8 +118,8 @@ def find(paths, inside: bool = False) -> tuple[list[Run], list[dict[str, Any]]]:
       raise ValueError(f"{path} is not a folder")
     if (path / layout.CONFIG_FILE).is_file():
       runs.append(load_run(path))
-    elif (path / FIT_FILE).is_file():
-      fits.append(json.loads((path / FIT_FILE).read_text()))
+    elif (path / record.FIT_FILE).is_file():
+      fits.append(json.loads((path / record.FIT_FILE).read_text()))
     else:
       inner = sorted(p for p in path.iterdir() if p.is_dir())
       found = find(inner, inside=True) if inner else ([], [])

@@ -17,7 +17,7 @@ from discosyn_jax.run import checkpoints, layout, logs, reading
 from discosyn_jax.synergies import fitting
 from discosyn_jax.training import loop
 from discosyn_jax.training.train import Trainer, _episode_metrics
-from experiments import paper, presets, report, report_runs
+from experiments import paper, presets, record, report, report_runs
 from tests import reference
 from tests.toy_env import ReachAction
 
@@ -26,6 +26,7 @@ ENVS = {"a": lambda: ReachAction(TARGET), "b": lambda: ReachAction(-TARGET, obs_
         "g": lambda: ReachAction(0.3 * TARGET)}
 SETS = {"set1": ("a", "b"), "sparse": ("g",)}
 DECODER = "params.params.synergy_decoder."
+PRESETS = presets.PRESETS  # the hand's, before the toy envs' start replaces them
 
 
 def make_trainer(config):
@@ -330,6 +331,82 @@ def test_transfer_from_a_given_decoder(experiments, tmp_path):
     paper.run("discosyn-set1", tmp_path, "ci", decoder_from=tmp_path, task_sets=SETS)
 
 
+def test_all_runs_every_row_of_the_papers_tables_once(tmp_path):
+  # the hand's sets and presets, as they are (the paper_start fixture patches them back)
+  with pytest.MonkeyPatch.context() as patch:
+    patch.setattr(presets, "PRESETS", PRESETS)
+    planner = paper.Planner(tmp_path, "cpu", 0)
+    steps = planner.plan("all")
+    whole = {name: planner.plan(name) for name in ("discosyn-set1", "sparse", "transfer")}
+  names = [s.name for s in steps]
+  assert len(names) == len(set(names))  # no folder twice
+  rows = lambda task_set: {s.meta["method"] for s in steps if s.meta["set"] == task_set
+                           and s.meta["experiment"].split("-")[0] in ("discosyn", "baselines")}
+  for task_set, paper_rows in paper.PAPER_ROWS.items():
+    assert rows(task_set) - {"fit"} == set(paper_rows)
+    # every row of the paper's table is there, DiscoSyn<b>-L from today's default start
+    assert set(report.PAPER_SOLVED[task_set]) <= {report.paper_row(m) for m in paper_rows}
+  # parts in order: set #1's rows, the sparse valve, transfer, set #2's rows last
+  experiments = [s.meta["experiment"] for s in steps]
+  assert experiments.index("sparse") > max(i for i, e in enumerate(experiments) if e.endswith("set1"))
+  assert experiments.index("transfer") > max(i for i, e in enumerate(experiments) if e == "sparse")
+  assert experiments[-1] == "baselines-set2"
+  # transfer and sparse freeze the decoder of each set's default row: the same step (folder,
+  # config), planned once, read from its record
+  by_name = {s.name: s for s in steps}
+  for frozen, source in (("sparse-synergies-seed0", "discosyn3-l-reward-set1-seed0"),
+                         ("transfer-synergies-set1-seed0", "discosyn3-l-reward-set1-seed0"),
+                         ("transfer-synergies-set2-seed0", "discosyn6-l-reward-set2-seed0")):
+    assert by_name[frozen].needs == (source,) and names.index(source) < names.index(frozen)
+    assert by_name[frozen].config.decoder_from == str(tmp_path.resolve() / source / "decoder.npz")
+    assert by_name[source].meta["method"] in paper.PAPER_ROWS[by_name[source].meta["set"]]
+  shared = [s for plan in whole.values() for s in plan if s.name in by_name]
+  assert all(by_name[s.name] == s for s in shared)
+  # discosyn-set1 alone is every start and control tried
+  assert {"DiscoSyn3-L", "DiscoSyn3-L-prior", "Random3-L-matched-reward"} <= {
+      s.meta["method"] for s in whole["discosyn-set1"]}
+
+
+def test_a_folder_of_records_continues_and_reports_without_checkpoints(experiments, tmp_path):
+  ppo, source = experiments / "ppo-set1-seed0", experiments / "discosyn3-l-set1-seed0"
+  # what a run ends by writing: its decoder, the z its policy picks, its metrics compressed
+  np.testing.assert_array_equal(fitting.read(source / "decoder.npz")[1]["synergies"]["kernel"],
+                                final_decoder(source)["synergies.kernel"])
+  with np.load(source / "z.npz") as z:
+    assert set(z.files) == {"a", "b"} and z["a"].dtype == np.float16 and z["a"].shape[1] == 3
+  assert logs.read_jsonl(ppo / "metrics.jsonl.xz") == logs.read_jsonl(ppo / "metrics.jsonl")
+  assert not (ppo / "decoder.npz").exists() and not (experiments / "pca4-set1-seed0" / "z.npz").exists()
+  kept = tmp_path / "kept"
+  messages = []
+  record.keep(experiments, kept, log=messages.append)
+  files = {p.relative_to(kept).as_posix() for p in kept.rglob("*") if p.is_file()}
+  assert {"ppo-set1-seed0/metrics.jsonl.xz", "discosyn3-l-set1-seed0/z.npz",
+          "synergies-set1-seed0/pca4.npz", "synergies-set1-seed0/explained_variance.json",
+          "sparse-synergies-seed0/decoder.npz"} <= files
+  assert not any(part in f for f in files for part in ("final/", "checkpoints/", "tb/",
+                                                       "metrics.jsonl/", "actions.npz"))
+  assert not any(f.endswith("metrics.jsonl") for f in files) and not messages
+  assert max((kept / f).stat().st_size for f in files) < 100_000
+  # the records alone: every step is done (the frozen run's decoder found where its source
+  # moved), nothing is trained
+  logged = []
+  for name in ("baselines-set1", "sparse"):
+    paper.run(name, kept, "ci", make_trainer=make_trainer, task_sets=SETS, log=logged.append)
+  assert logged and all("done already" in line for line in logged)
+  assert not list(kept.rglob("final"))
+  # the report from the records is the report from the runs, table for table
+  texts = [report.write([folder], folder / "report", make_trainer=make_trainer).read_text()
+           for folder in (experiments, kept)]
+  assert texts[0] == texts[1] and "`..`" in texts[0] and "tsne-set1.png" in texts[0]
+  # a step not kept is trained again from the records of the steps it needs
+  shutil.rmtree(kept / "sparse-synergies-seed0")
+  paper.run("sparse", kept, "ci", make_trainer=make_trainer, task_sets=SETS, log=lambda *a: None)
+  np.testing.assert_array_equal(final_decoder(kept / "sparse-synergies-seed0")["synergies.kernel"],
+                                final_decoder(source)["synergies.kernel"])
+  with pytest.raises(ValueError, match="is .* or inside it"):
+    record.keep(experiments, experiments / "kept")
+
+
 def test_methods_run_with_the_runs_they_need(tmp_path):
   plan = lambda name: paper.Planner(tmp_path, "ci", 0, SETS).plan(name)
   names = lambda steps: [s.name for s in steps]
@@ -366,3 +443,8 @@ def test_cli_rejects_bad_input(tmp_path, capsys):
   assert cli.main(["report", str(tmp_path / "empty"), "--out", str(tmp_path / "r")]) == 2
   assert "holds no run" in capsys.readouterr().err
   assert not (tmp_path / "r").exists()
+  assert cli.main(["keep", str(tmp_path / "nowhere"), str(tmp_path / "k")]) == 2
+  assert "nowhere is not a folder" in capsys.readouterr().err
+  assert cli.main(["keep", str(tmp_path / "empty"), str(tmp_path / "k")]) == 2
+  assert "holds no finished run or fit to keep" in capsys.readouterr().err
+  assert not (tmp_path / "k").exists()

@@ -14,8 +14,8 @@ import time
 from discosyn_jax import atomic
 from discosyn_jax.run import layout
 
-# A kept run's bulky log compressed (docs/results keeps metrics.jsonl as metrics.jsonl.xz:
-# `xz -9 RUN/metrics.jsonl`); readers take either.
+# A kept run's bulky log compressed (a run's record keeps metrics.jsonl as
+# metrics.jsonl.xz, `archive`); readers take either.
 ARCHIVED = ".xz"
 
 # bookkeeping columns of the rows: the x axes, not curves of their own
@@ -54,6 +54,18 @@ def read_log(path: pathlib.Path) -> list[dict]:
     if candidate.is_file():
       return read_jsonl(candidate)
   return []
+
+
+def archive(path: pathlib.Path) -> pathlib.Path:
+  """Write `path`.xz beside the log at `path` (in one step: a kill leaves the old one or
+  none); the log itself stays, the loop appends to it."""
+  path = pathlib.Path(path)
+  target = path.with_name(path.name + ARCHIVED)
+  tmp = target.with_name(target.name + atomic.NEW)
+  with lzma.open(tmp, "wb", preset=9) as f:
+    f.write(path.read_bytes())
+  tmp.replace(target)
+  return target
 
 
 def tag(name: str, kind: str) -> str:

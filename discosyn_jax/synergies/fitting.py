@@ -5,7 +5,8 @@ A fitted model is written as a *synergy file* (.npz): the decoder's parameters, 
 the layout of DiscoSyn's own decoder (linear: `synergies.kernel` (k, 20) and
 `synergies.bias`; mlp: networks.GaussianHead's), plus a JSON `meta` entry with the config
 fields the decoder needs (decoder, n_synergies, decoder_hidden) and its explained variance.
-A run directory works as a source too: its latest checkpoint's decoder.
+A run directory works as a source too: its latest checkpoint's decoder, or where its
+checkpoints are not kept (a run's record, experiments/record.py) its decoder.npz.
 
 Both fitted decoders take z on a unit scale: PCA's components are scaled by the standard
 deviation along them, the autoencoder's latent code is standardised and the scaling is
@@ -198,8 +199,11 @@ def read(path: str | pathlib.Path) -> tuple[dict[str, Any], dict]:
   """(meta with the decoder's config fields, decoder params) of a synergy file or a run."""
   path = pathlib.Path(path)
   if path.is_dir():
-    from discosyn_jax.run import checkpoints, reading
+    from discosyn_jax.run import checkpoints, layout, reading
 
+    kept = path / layout.DECODER_FILE
+    if kept.is_file() and not checkpoints.candidates(path):  # a record without checkpoints
+      return read(kept)
     config, _, flat = reading.read_run(path, lambda c: checkpoints.read_arrays(c, _RUN_DECODER))
     if config.decoder == "identity":
       raise ValueError(f"{path} is a full-action run: it has no synergy decoder")

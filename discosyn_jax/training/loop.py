@@ -108,7 +108,8 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *,
           make_trainer: Callable[[TrainConfig], Trainer], resume: bool = False,
           force: bool = False, progress: bool = True, log=print,
           stop_at: float | None = None) -> dict[str, Any]:
-  """Run (or continue) a training run in `run_dir`; return the final evaluation.
+  """Run (or continue) a training run in `run_dir`; return the final evaluation
+  ("results"), state, trainer and compile time.
   `make_trainer(config)` builds the Trainer of the config the run goes on with (its envs
   and devices: `tasks.trainer` for the registered tasks), once the folder is checked.
   `stop_at`: end the run (final checkpoint and all) at the first evaluation at which every
@@ -238,7 +239,7 @@ def _train(trainer: Trainer, run_dir: pathlib.Path, resume: bool, writer: owner.
       bar.close()
   log(f"training curves: {', '.join(str(p) for p in curves)}")
   log(evaluation.format_table(results, step, config))
-  return {"results": results, "state": state, "compile_s": compile_s}
+  return {"results": results, "state": state, "compile_s": compile_s, "trainer": trainer}
 
 
 def _start(trainer: Trainer, run_dir: pathlib.Path, resume: bool, log):
