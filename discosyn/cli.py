@@ -149,7 +149,16 @@ def build_parser() -> argparse.ArgumentParser:
   p.set_defaults(fn=commands.cmd_keep)
 
   p = sub.add_parser("report", help="REPORT.md and figures from run folders: solved tasks, "
-                     "explained variance, curves, t-SNE, transfer, sparse reward")
+                     "explained variance, curves, t-SNE, transfer, sparse reward",
+                     description="REPORT.md and figures from run folders or their records "
+                     "alone (`discosyn keep`): per set, each task's final success, mean "
+                     "(min–max) [seeds] with the paper's marks, and each row's success over "
+                     "the tasks at the end and over the curve; explained variance; curves; "
+                     "the synergy subspaces; t-SNE of z (z.npz, else the checkpoint); "
+                     "transfer and the sparse valve by final success, mean over the curve, "
+                     "env steps to the threshold (and to the first reward on the sparse "
+                     "valve). The text names the folders relative to the report's own and "
+                     "holds no date: the same folders give the same REPORT.md anywhere.")
   p.add_argument("runs", nargs="+", help="run folders, synergy-fit folders, or folders of them")
   p.add_argument("--out", default="report",
                  help="folder for REPORT.md and its figures (default: %(default)s)")

@@ -2,12 +2,16 @@
 
 Writes OUT/REPORT.md and PNG figures beside it:
   - tables of solved tasks per task set, in the paper's layout (a row per method, a column
-    per task), each cell with the final deterministic success (mean and spread over seeds,
-    the number of seeds) and the paper's mark beside it;
+    per task), each cell with the final deterministic success, mean (min–max) [seeds], and
+    the paper's mark beside the paper's rows (DiscoSyn<b>-L: both the paper's start and
+    today's default, -reward); per row the success over the set's tasks at the end and
+    over the whole curve (methods are judged over the budget and at its end);
   - explained variance of the sequential baselines' PCA / autoencoder fits;
   - training curves (evaluation success against env steps of that task, per method);
   - t-SNE of the z the DiscoSyn policy picks, coloured by task (the paper's Fig. 6);
-  - transfer to unseen tasks and the sparse goal valve: curves and steps to the first reward.
+  - transfer to unseen tasks and the sparse goal valve: per method and task the final
+    success, the mean over the curve, the env steps to the threshold, and for the sparse
+    valve the env steps to the first reward; curves.
 
 "Solved" is: the mean over seeds of the final evaluation's success >= `threshold`.
 A run's method and set come from its experiment.json (written by `discosyn experiment`), or
@@ -53,25 +57,35 @@ def _success(runs: list[Run], task: str) -> np.ndarray:
   return np.array([r.final[f"{task}/success"] for r in runs if f"{task}/success" in r.final])
 
 
+def _percent(values: np.ndarray) -> str:
+  """mean (min–max) of success rates; – for none."""
+  if values.size == 0:
+    return "–"
+  spread = f" ({values.min():.0%}–{values.max():.0%})" if values.size > 1 else ""
+  return f"{values.mean():.0%}{spread}"
+
+
 def _cell(values: np.ndarray, threshold: float, paper: str | None) -> str:
   if values.size == 0:
     return "–"
-  mean = values.mean()
-  mark = "✓" if mean >= threshold else "✗"
-  spread = f" ({values.min():.0%}–{values.max():.0%})" if values.size > 1 else ""
+  mark = "✓" if values.mean() >= threshold else "✗"
   paper_mark = "" if paper is None else f" (paper {'✓' if paper == '1' else '✗'})"
-  return f"{mark} {mean:.0%}{spread} [{values.size}]{paper_mark}"
+  return f"{mark} {_percent(values)} [{values.size}]{paper_mark}"
 
 
-def _mean_over_tasks(group: list[Run], task_names) -> str:
-  """Each seed's success averaged over the set's tasks, then the mean (min-max) over seeds:
-  the figure the targets for a learned decoder compare (docs/RESULTS.md)."""
-  per_seed = np.array([np.mean([r.final[f"{t}/success"] for t in task_names]) for r in group
-                       if all(f"{t}/success" in r.final for t in task_names)])
-  if per_seed.size == 0:
-    return "–"
-  spread = f" ({per_seed.min():.0%}–{per_seed.max():.0%})" if per_seed.size > 1 else ""
-  return f"{per_seed.mean():.0%}{spread}"
+def _mean_success(run: Run, task_names, over_curve: bool) -> float | None:
+  """A run's success averaged over `task_names`, at its final evaluation or averaged over
+  all its evaluations (the mean over the curve); None where one is missing."""
+  rows = run.evals if over_curve else run.evals[-1:]
+  values = [row.get(f"{t}/success") for row in rows for t in task_names]
+  return float(np.mean(values)) if values and None not in values else None
+
+
+def _mean_over_tasks(group: list[Run], task_names, over_curve: bool = False) -> str:
+  """Each seed's success averaged over the set's tasks (`_mean_success`), then the mean
+  (min-max) over seeds: the figure the targets for a learned decoder compare."""
+  per_seed = [_mean_success(r, task_names, over_curve) for r in group]
+  return _percent(np.array([v for v in per_seed if v is not None]))
 
 
 def solved_tables(runs: list[Run], threshold: float) -> str:
@@ -82,23 +96,24 @@ def solved_tables(runs: list[Run], threshold: float) -> str:
     task_names = list(in_set[0].config.tasks)
     paper = PAPER_SOLVED.get(task_set, {})
     lines += [f"### {task_set}: tasks solved (success >= {threshold:.0%})", "",
-              "| method | " + " | ".join(task_names) + " | mean | solved |",
-              "|---" * (len(task_names) + 3) + "|"]
+              "| method | " + " | ".join(task_names) + " | mean | over the curve | solved |",
+              "|---" * (len(task_names) + 4) + "|"]
     for method in order({r.method for r in in_set}):
       group = [r for r in in_set if r.method == method]
       cells, solved = [], 0
       paper_tasks = TASK_SETS[task_set] if task_set in PAPER_SOLVED else ()
+      marks = paper.get(paper_row(method))
       for task in task_names:
         values = _success(group, task)
-        mark = (paper[method][paper_tasks.index(task)]
-                if method in paper and task in paper_tasks else None)
+        mark = marks[paper_tasks.index(task)] if marks and task in paper_tasks else None
         cells.append(_cell(values, threshold, mark))
         solved += bool(values.size and values.mean() >= threshold)
-      paper_count = (f" (paper {paper[method].count('1')}/4)"
-                     if method in paper and set(paper_tasks) == set(task_names) else "")
+      paper_count = (f" (paper {marks.count('1')}/4)"
+                     if marks and set(paper_tasks) == set(task_names) else "")
       unfinished = sum(not r.finished for r in group)
       note = f", {unfinished} unfinished" if unfinished else ""
       lines.append(f"| {method} | " + " | ".join(cells) + f" | {_mean_over_tasks(group, task_names)}"
+                   f" | {_mean_over_tasks(group, task_names, over_curve=True)}"
                    f" | {solved}/{len(task_names)}{paper_count}{note} |")
     lines.append("")
   return "\n".join(lines)
@@ -212,6 +227,52 @@ def first_reward(run: Run, task: str) -> tuple[int, int] | None:
   return None
 
 
+def steps_to(run: Run, task: str, threshold: float) -> int | None:
+  """Env steps of the task until the first evaluation at which its success reached
+  `threshold`; None when none did."""
+  for row in run.evals:
+    if row.get(f"{task}/success", 0.0) >= threshold:
+      return run.per_task_env_steps(row)
+  return None
+
+
+def _steps(values: list[int | None], none: str) -> str:
+  """Env steps over seeds: mean (min–max) [seeds that got there], and the seeds that did
+  not, `none` [count]."""
+  got = np.array([v for v in values if v is not None], float)
+  missed = len(values) - got.size
+  text = ""
+  if got.size:
+    spread = f" ({got.min():,.0f}–{got.max():,.0f})" if got.size > 1 else ""
+    text = f"{got.mean():,.0f}{spread} [{got.size}]"
+  if missed:
+    text += ("; " if text else "") + f"{none} [{missed}]"
+  return text
+
+
+def frozen_table(group: list[Run], threshold: float, first_rewards: bool) -> str:
+  """Transfer or the sparse valve: per method and task over seeds, the final success, the
+  mean success over the evaluation curve (how soon, not only how far), the env steps to
+  `threshold` success and, for a sparse reward, to the first reward."""
+  head = (f"| method | task | final success | mean over the curve | env steps to "
+          f"{threshold:.0%} |" + (" env steps to the first reward |" if first_rewards else ""))
+  lines = [head, "|---" * (head.count("|") - 1) + "|"]
+  for method in order({r.method for r in group}):
+    runs = [r for r in group if r.method == method]
+    for task in dict.fromkeys(t for r in runs for t in r.config.tasks):
+      with_task = sorted((r for r in runs if task in r.config.tasks), key=lambda r: r.seed)
+      final = _success(with_task, task)
+      curve = np.array([np.mean([row[f"{task}/success"] for row in r.evals])
+                        for r in with_task if r.evals])
+      cells = [f"{_percent(final)} [{final.size}]", f"{_percent(curve)} [{curve.size}]",
+               _steps([steps_to(r, task, threshold) for r in with_task], "not reached")]
+      if first_rewards:
+        firsts = [first_reward(r, task) for r in with_task]
+        cells.append(_steps([f and f[0] for f in firsts], "none seen"))
+      lines.append(f"| {method} | {task} | " + " | ".join(cells) + " |")
+  return "\n".join(lines) + "\n"
+
+
 # -- figures ----------------------------------------------------------------------
 def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = True,
           force: bool = False, make_trainer=None) -> pathlib.Path:
@@ -235,7 +296,11 @@ def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = Tr
            + ", ".join(f"`{p}`" for p in sources) + " (relative to this report's folder).",
            f"A task is *solved* when the mean over seeds of the final deterministic evaluation's "
            f"success is at least {threshold:.0%}. Cells: mark, mean success, (min–max "
-           "over seeds), [seeds], and the paper's mark (Tables I and II).", ""]
+           "over seeds), [seeds], and the paper's mark (Tables I and II; the paper's "
+           f"DiscoSyn<b>-L marks also beside today's default start, DiscoSyn<b>-L{REWARDED}). "
+           "*mean*: each seed's success averaged over the set's tasks at the end, *over the "
+           "curve*: the same averaged over every evaluation of the run; mean (min–max) over "
+           "seeds.", ""]
   scales = sorted({r.scale for r in runs if r.scale})
   if scales:
     lines += [f"Scales: {', '.join(scales)}.", ""]
@@ -274,7 +339,8 @@ def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = Tr
               "low it was between their random starts (initial); a seed that only turned its "
               "own start keeps a high overlap with it. The planted span: the subspace the "
               "planted tasks' targets lie in (tasks/planted.py). Cells: mean (min–max) [pairs "
-              "or seeds]; the learned subspaces need the runs' checkpoints.", "", discovered]
+              "or seeds]; the learned subspaces are read from the runs' checkpoints, or their "
+              "records' decoder.npz.", "", discovered]
     for task_set in sorted({r.task_set for r in main}):
       name = f"overlap-{task_set}.png".replace("+", "_")
       if report_figures.overlap_curves([r for r in main if r.task_set == task_set], out / name,
@@ -300,18 +366,15 @@ def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = Tr
     group = [r for r in runs if r.experiment == experiment]
     if not group:
       continue
-    lines += [f"## {heading}", "", "| method | task | final success | first reward: env steps "
-              "of the task (control steps per env) |", "|---|---|---|---|"]
-    for run in sorted(group, key=lambda r: (r.task_set, r.method, r.seed)):
-      for task in run.config.tasks:
-        success = run.final.get(f"{task}/success")
-        first = first_reward(run, task)
-        first_text = f"{first[0]:,} ({first[1]:,})" if first else "none seen"
-        lines.append(f"| {run.method} (seed {run.seed}) | {task} | "
-                     f"{'–' if success is None else f'{success:.0%}'} | {first_text} |")
+    lines += [f"## {heading}", "", "Per method and task over seeds: the final success, the "
+              "mean success over the evaluation curve, the env steps of the task to the first "
+              f"evaluation at {threshold:.0%} success"
+              + (" and to the first reward seen in training" if experiment == "sparse" else "")
+              + ": mean (min–max) [seeds that got there], and [seeds] that did not.", "",
+              frozen_table(group, threshold, first_rewards=experiment == "sparse")]
     name = f"{experiment}.png"
     report_figures.curves(group, out / name, f"{heading}: deterministic evaluation success")
-    lines += ["", f"![{experiment}]({name})", ""]
+    lines += [f"![{experiment}]({name})", ""]
     if experiment == "sparse":
       report_figures.curves(group, out / "sparse-return.png", "sparse goal valve: evaluation return", "return")
       lines += ["![sparse return](sparse-return.png)", ""]

@@ -13,15 +13,22 @@ from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import hands
 from discosyn_jax.run import layout, logs
 from experiments import record
-from experiments.presets import DECAY
+from experiments.presets import DECAY, PRIORED, REWARDED
 from tasks import TASK_SETS
 
 _DECAYED = f"-wd{DECAY['decoder_weight_decay']:g}a{DECAY['decoder_weight_decay_steps']}"
 METHOD_ORDER = ("PPO", "PCA4", "AE4", "PCA6", "AE6")
-for _b in (3, 4, 6):  # each DiscoSyn row (the paper's update, the decayed) above its controls
+for _b in (3, 4, 6):
+  # each linear DiscoSyn row above its own controls (its start frozen, the matched control):
+  # today's default start (the reward prior) first, then the object prior's, the paper's
+  # random start and its decayed update; then the random decoder frozen, every start's
+  # control (z bounded, z free); the same for the mlp decoder
+  for _start, _frozen in ((REWARDED, f"Prior{_b}-L{REWARDED}"), (PRIORED, f"Prior{_b}-L"),
+                          ("", None), (_DECAYED, None)):
+    METHOD_ORDER += (f"DiscoSyn{_b}-L{_start}",) + ((_frozen,) if _frozen else ()) + (
+        f"Random{_b}-L-matched{_start}",)
   METHOD_ORDER += tuple(f"{m}{_b}-{k}{c}" for k in ("L", "NL") for m, c in (
-      ("DiscoSyn", ""), ("DiscoSyn", _DECAYED), ("Random", ""), ("Random", "-zfree"),
-      ("Random", "-matched"), ("Random", f"-matched{_DECAYED}")))
+      ("DiscoSyn", ""), ("Random", ""), ("Random", "-zfree")) if (k, m) != ("L", "DiscoSyn"))
 MAIN_EXPERIMENTS = ("discosyn", "baselines")
 
 

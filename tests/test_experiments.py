@@ -235,9 +235,11 @@ def test_report_lists_every_method_and_task(experiments, tmp_path):
   for method in ("PPO", "PCA4", "AE4", "PCA6", "AE6", "DiscoSyn3-L"):
     row = next(line for line in table.splitlines() if line.startswith(f"| {method} |"))
     assert row.count("[1]") == 2  # a cell per task, one seed behind each
-  assert "| a | b | mean | solved |" in table
+  assert "| a | b | mean | over the curve | solved |" in table
   assert "| set1 | PCA |" in text and "| set1 | AE |" in text
-  assert "DiscoSyn3-L frozen (seed 0) | g |" in text and "PPO (seed 0) | g |" in text
+  sparse = text.split("## The sparse goal valve")[1]
+  assert "| DiscoSyn3-L frozen | g | " in sparse and "| PPO | g | " in sparse
+  assert "| env steps to the first reward |" in sparse
   # the synergy-space table: a frozen decoder's gradient is marked as never applied
   learned = text.split("## Is the synergy space learned?")[1].split("\n## ")[0].splitlines()
   random = next(line for line in learned if line.startswith("| Random3-L "))  # sparse's control
@@ -256,33 +258,69 @@ def test_report_lists_every_method_and_task(experiments, tmp_path):
   assert (tmp_path / "report" / "notes.png").is_file()
 
 
-def test_report_mean_and_spread_over_seeds(tmp_path):
+def write_logs(run, config, meta, evals) -> None:
+  """A run folder of logs alone: its config, experiment.json and evaluations (per row: step
+  and each task's success)."""
+  run.mkdir(parents=True)
+  (run / "config.json").write_text(json.dumps(config.to_dict()))
+  (run / "experiment.json").write_text(json.dumps(meta))
+  rows = [{"step": step, "env_steps": 0, **{f"{t}/success": v for t, v in success.items()},
+           **{f"{t}/return": 0.0 for t in success}} for step, success in evals]
+  (run / "eval.jsonl").write_text("".join(json.dumps(row) + "\n" for row in rows))
+
+
+@pytest.mark.parametrize("method", ["DiscoSyn3-L", "DiscoSyn3-L-reward"])
+def test_report_mean_and_spread_over_seeds(tmp_path, method):
+  valves = ("valve0", "valve1", "valve2", "valve3")
   for seed, success in ((0, 1.0), (1, 0.5)):
-    run = tmp_path / f"run{seed}"
-    run.mkdir()
-    config = TrainConfig(tasks=("valve0", "valve1", "valve2", "valve3"), seed=seed)
-    (run / "config.json").write_text(json.dumps(config.to_dict()))
-    (run / "experiment.json").write_text(json.dumps(
-        dict(experiment="discosyn-set1", method="DiscoSyn3-L", set="set1", seed=seed, scale="cpu")))
-    # seed 0 fails valve3 in part: its mean over the four valves is 0.9, seed 1's 0.5
-    per_task = [success] * 3 + [0.6 if seed == 0 else success]
-    # logs without a checkpoint: seed 0 evaluated its last step, seed 1 stopped before it
-    row = {"step": config.steps if seed == 0 else 10, "env_steps": 0,
-           **{f"valve{i}/success": per_task[i] for i in range(4)},
-           **{f"valve{i}/return": 0.0 for i in range(4)}}
-    (run / "eval.jsonl").write_text(json.dumps(row) + "\n")
+    config = TrainConfig(tasks=valves, seed=seed)
+    # seed 0 fails valve3 in part: its mean over the four valves is 0.9, seed 1's 0.5; seed
+    # 0 had nothing at its first evaluation (over the curve: 0.45), seed 1 stopped before
+    # its last step (logs without a checkpoint: unfinished)
+    per_task = dict(zip(valves, [success] * 3 + [0.6 if seed == 0 else success]))
+    evals = [(10, dict.fromkeys(valves, 0.0)), (config.steps, per_task)] if seed == 0 else \
+        [(10, per_task)]
+    write_logs(tmp_path / f"run{seed}", config, dict(experiment="discosyn-set1", method=method,
+                                                     set="set1", seed=seed, scale="cpu"), evals)
   (tmp_path / "report").mkdir()  # a report written beside the runs is passed over
   (tmp_path / "report" / "REPORT.md").write_text("an earlier report")
   runs, _ = report_runs.find([tmp_path])
   assert len(runs) == 2
   table = report.solved_tables(runs, threshold=0.7)
-  assert "| DiscoSyn3-L | ✓ 75% (50%–100%) [2] (paper ✓) |" in table
-  assert "| 70% (50%–90%) | 3/4 (paper 4/4), 1 unfinished |" in table  # mean over tasks, per seed
+  # the paper's marks beside the paper's start and today's default start alike
+  assert f"| {method} | ✓ 75% (50%–100%) [2] (paper ✓) |" in table
+  # the mean over tasks per seed at the end, and over the curve
+  assert "| 70% (50%–90%) | 48% (45%–50%) | 3/4 (paper 4/4), 1 unfinished |" in table
   assert "✗" in report.solved_tables(runs, threshold=0.8)
   # a copy of a run (an ablation, a rerun) would count as a third seed: it is refused
   shutil.copytree(tmp_path / "run1", tmp_path / "more" / "run1-again")
-  with pytest.raises(ValueError, match="both DiscoSyn3-L seed 1 on set1"):
+  with pytest.raises(ValueError, match=f"both {method} seed 1 on set1"):
     report_runs.find([tmp_path])
+
+
+def test_each_discosyn_row_stands_above_its_controls_todays_default_first():
+  rows = ["PPO", "DiscoSyn3-L-reward", "Prior3-L-reward", "Random3-L-matched-reward",
+          "DiscoSyn3-L-prior", "Prior3-L", "DiscoSyn3-L", "Random3-L-matched", "Random3-L",
+          "Random3-L-zfree", "DiscoSyn3-NL", "Random3-NL-zfree", "DiscoSyn4-L-reward",
+          "DiscoSyn3-L frozen"]
+  assert report_runs.order(set(rows)) == rows
+
+
+def test_transfer_is_judged_over_the_curve_and_by_the_steps_to_the_threshold(tmp_path):
+  config = TrainConfig(tasks=("valve_cw",), num_envs=8, unroll_length=5, steps=30)
+  curves = {0: [0.2, 0.9, 1.0], 1: [0.5, 0.6, 0.85], 2: [0.0, 0.1, 0.3]}  # at steps 10, 20, 30
+  for seed, success in curves.items():
+    write_logs(tmp_path / f"seed{seed}", config.replace(seed=seed),
+               dict(experiment="transfer", method="DiscoSyn3-L frozen", set="unseen-set1",
+                    seed=seed), [(10 * (i + 1), {"valve_cw": v}) for i, v in enumerate(success)])
+  runs, _ = report_runs.find([tmp_path])
+  assert report.steps_to(runs[0], "valve_cw", 0.8) == 20 * 8 * 5  # env steps of the task
+  table = report.frozen_table(runs, 0.8, first_rewards=False)
+  # final 1.0 / 0.85 / 0.3; over the curve 0.7 / 0.65 / 0.13; 80 % at 800 and 1,200 env
+  # steps, never on seed 2
+  assert table.splitlines()[2] == ("| DiscoSyn3-L frozen | valve_cw | 72% (30%–100%) [3] | "
+                                   "49% (13%–70%) [3] | 1,000 (800–1,200) [2]; not reached [1] |")
+  assert "first reward" not in table and "first reward" in report.frozen_table(runs, 0.8, True)
 
 
 def test_train_flag_decoder_from_sets_a_frozen_space(tmp_path):
