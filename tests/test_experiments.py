@@ -2,6 +2,7 @@
 PPO, collection, PCA / autoencoder fits, frozen-space training, transfer of a DiscoSyn
 decoder, the sparse-reward comparison and the report."""
 
+import io
 import json
 import shutil
 
@@ -222,6 +223,20 @@ def test_finished_steps_are_kept(experiments):
   paper.run("baselines-set1", experiments, "ci", make_trainer=make_trainer, task_sets=SETS,
             log=lambda *a: None)
   assert final.stat().st_mtime_ns == before and label.read_text() == meta
+  # a finished run without its record (made before records were written) gets it from its
+  # final checkpoint, the same files
+  source = experiments / "discosyn3-l-set1-seed0"
+  before = {name: (source / name).read_bytes() for name in ("z.npz", "metrics.jsonl.xz")}
+  for name in ("z.npz", "decoder.npz", "metrics.jsonl.xz"):
+    (source / name).unlink()
+  logs = []
+  paper.run("sparse", experiments, "ci", make_trainer=make_trainer, task_sets=SETS,
+            log=logs.append)
+  assert "[discosyn3-l-set1-seed0] its record, from its final checkpoint" in logs
+  assert record.complete(source, reading.load_run(source)[0])
+  with np.load(source / "z.npz") as z, np.load(io.BytesIO(before["z.npz"])) as z0:
+    np.testing.assert_array_equal(z["a"], z0["a"])
+  assert (source / "metrics.jsonl.xz").read_bytes() == before["metrics.jsonl.xz"]
   # another scale asks for another config: the finished run is not silently replaced
   with pytest.raises(ValueError, match="does not match"):
     paper.run("baselines-set1", experiments, "cpu", make_trainer=make_trainer, task_sets=SETS,
