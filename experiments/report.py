@@ -214,16 +214,15 @@ def _last_logged(run: Run) -> dict[str, Any]:
   return end
 
 
-def first_reward(run: Run, task: str) -> tuple[int, int] | None:
-  """(env steps of the task, control steps of each env) until the first non-zero reward of
-  `task` in training, or None when none was seen (or the run did not log it)."""
+def first_reward(run: Run, task: str) -> int | None:
+  """Env steps of the task until the first non-zero reward of `task` in training, or None
+  when none was seen (or the run did not log it)."""
   cfg = run.config
   for row in logs.read_log(run.path / layout.METRICS_FILE):
     t = row.get(f"{task}/first_reward_t")
     if t is not None and t < cfg.unroll_length:
       before = row["step"] - 1  # train steps before the one that saw it
-      return (before * cfg.num_envs * cfg.unroll_length + (int(t) + 1) * cfg.num_envs,
-              before * cfg.unroll_length + int(t) + 1)
+      return before * cfg.num_envs * cfg.unroll_length + (int(t) + 1) * cfg.num_envs
   return None
 
 
@@ -267,8 +266,7 @@ def frozen_table(group: list[Run], threshold: float, first_rewards: bool) -> str
       cells = [f"{_percent(final)} [{final.size}]", f"{_percent(curve)} [{curve.size}]",
                _steps([steps_to(r, task, threshold) for r in with_task], "not reached")]
       if first_rewards:
-        firsts = [first_reward(r, task) for r in with_task]
-        cells.append(_steps([f and f[0] for f in firsts], "none seen"))
+        cells.append(_steps([first_reward(r, task) for r in with_task], "none seen"))
       lines.append(f"| {method} | {task} | " + " | ".join(cells) + " |")
   return "\n".join(lines) + "\n"
 
