@@ -25,15 +25,19 @@ def cmd_tasks(args) -> None:
 
 
 def cmd_demo(args) -> None:
-  """Build each scene, run a random policy for one episode per env, print what it measured."""
+  """Build each scene, run a random policy for one episode per env, print what it measured;
+  and the neutral action's return and success (every actuator at mid-range, where an
+  untrained policy's deterministic action starts: a task it nearly solves teaches nothing,
+  docs/YOUR_TASK.md)."""
   import jax
+  import jax.numpy as jnp
 
   import tasks
   from discosyn_jax.env import rollouts
 
-  print(f"random policy, {args.batch} envs x one episode per task")
+  print(f"random policy, {args.batch} envs x one episode per task; neutral: the zero action")
   print(f"{'task':8s} {'backend':7s} {'obs':>4s} {'build s':>8s} {'compile s':>9s} {'env steps/s':>11s} "
-        f"{'return':>7s} {'success':>7s} {'diverged':>8s}")
+        f"{'return':>7s} {'success':>7s} {'diverged':>8s} {'neutral: return':>15s} {'success':>7s}")
   for name in tasks.expand(args.tasks):
     start = time.perf_counter()
     env = tasks.make(name, backend=args.backend, hand=args.hand)
@@ -48,8 +52,11 @@ def cmd_demo(args) -> None:
     _, states = jax.block_until_ready(run(keys))
     rate = args.batch * env.episode_length / (time.perf_counter() - start)
     ret, success = states.reward.sum(0).mean(), states.metrics["success"][-1].mean()
+    zero = lambda t, key, batch, env=env: jnp.zeros((batch, env.action_size))
+    neutral = rollouts.run_episode(env, keys, zero)[1]
     print(f"{name:8s} {env.backend:7s} {env.observation_size:4d} {built:8.2f} {compiled:9.2f} {rate:11,.0f} "
-          f"{float(ret):7.2f} {float(success):7.1%} {int(states.metrics['diverged'].sum()):8d}")
+          f"{float(ret):7.2f} {float(success):7.1%} {int(states.metrics['diverged'].sum()):8d} "
+          f"{float(neutral.reward.sum(0).mean()):15.2f} {float(neutral.metrics['success'][-1].mean()):7.1%}")
 
 
 def cmd_render_scenes(args) -> None:

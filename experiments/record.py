@@ -80,6 +80,14 @@ def z_samples(trainer, state, episodes: int = Z_EPISODES,
   return out
 
 
+def has_z(run_dir: pathlib.Path) -> bool:
+  """Whether `z_of` can give the run's z samples: its z.npz, or a checkpoint to draw them
+  from (a folder of logs alone has neither)."""
+  run_dir = pathlib.Path(run_dir)
+  return ((run_dir / layout.Z_FILE).is_file() or (run_dir / layout.FINAL).is_dir()
+          or any((run_dir / layout.PERIODIC).glob("*")))
+
+
 def z_of(run_dir: pathlib.Path, make_trainer: Callable | None = None) -> dict[str, np.ndarray]:
   """The z samples of a run: its z.npz (its final state's), else drawn from its newest
   checkpoint (a run made before records, or by `discosyn train`)."""

@@ -25,12 +25,13 @@ from __future__ import annotations
 import os
 import pathlib
 import re
+import shutil
 from typing import Any
 
 import numpy as np
 
 from discosyn_jax.run import layout, logs
-from experiments import report_figures
+from experiments import record, report_figures
 from experiments.presets import REWARDED
 from experiments.report_runs import Run, find, order
 from tasks import TASK_SETS
@@ -284,6 +285,18 @@ def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = Tr
   report = out / "REPORT.md"
   if report.exists() and not force:
     raise ValueError(f"{out} already holds a report; pass --force to replace it")
+  made = not out.exists()
+  try:
+    return _write(runs, fits, paths, out, threshold, with_tsne, make_trainer)
+  except BaseException:
+    if made:  # a report that fails leaves no folder of half its figures
+      shutil.rmtree(out, ignore_errors=True)
+    raise
+
+
+def _write(runs, fits, paths, out: pathlib.Path, threshold: float, with_tsne: bool,
+           make_trainer) -> pathlib.Path:
+  report = out / "REPORT.md"
   old_figures = set(_figures(report.read_text())) if report.exists() else set()
   out.mkdir(parents=True, exist_ok=True)
 
@@ -345,19 +358,19 @@ def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = Tr
                         f"{task_set}: the decoder's subspace during training"):
         lines += [f"![overlap {task_set}]({name})", ""]
 
-  if with_tsne and any(r.method.startswith("DiscoSyn") for r in main):
+  # the runs whose z can be read (z.npz, or a checkpoint to draw it from), per set
+  drawable = [r for r in main if with_tsne and r.method.startswith("DiscoSyn") and r.evals
+              and record.has_z(r.path)]
+  if drawable:
     lines += ["## t-SNE of the low-dimensional actions", ""]
-    for task_set in sorted({r.task_set for r in main}):
-      disco = [r for r in main if r.method.startswith("DiscoSyn") and r.evals]
-      disco = [r for r in disco if r.task_set == task_set]
-      if not disco:
-        continue
-      best = max(disco, key=lambda r: (np.mean([r.final.get(f"{t}/success", 0)
-                                                for t in r.config.tasks]), -r.seed))
-      name = f"tsne-{task_set}.png".replace("+", "_")
-      report_figures.tsne(best, out / name, make_trainer=make_trainer)
-      lines += [f"{best.method} (its best-scoring run on {task_set}, `{best.path.name}`):", "",
-                f"![t-SNE {task_set}]({name})", ""]
+  for task_set in sorted({r.task_set for r in drawable}):
+    best = max((r for r in drawable if r.task_set == task_set),
+               key=lambda r: (np.mean([r.final.get(f"{t}/success", 0) for t in r.config.tasks]),
+                              -r.seed))
+    name = f"tsne-{task_set}.png".replace("+", "_")
+    report_figures.tsne(best, out / name, make_trainer=make_trainer)
+    lines += [f"{best.method} (its best-scoring run on {task_set}, `{best.path.name}`):", "",
+              f"![t-SNE {task_set}]({name})", ""]
 
   for experiment, heading in (("transfer", "Transfer to unseen tasks"),
                               ("sparse", "The sparse goal valve")):

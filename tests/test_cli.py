@@ -62,6 +62,7 @@ def test_demo_prints_a_row_per_task(capsys):
   assert cli.main(["demo", "valve1", "--batch", "2"]) == 0
   rows = [l for l in capsys.readouterr().out.splitlines() if l.startswith("valve1")]
   assert len(rows) == 1 and rows[0].split()[1] == "native"
+  assert rows[0].split()[-1] == "0.0%"  # the neutral action leaves a valve where it is
 
 
 def test_bad_input_is_one_line_and_exit_2():

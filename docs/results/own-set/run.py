@@ -5,7 +5,9 @@ default start, beside its strongest control, as a researcher would run them from
 
 default: DiscoSyn3-L-reward (the linear DiscoSyn preset's start: the reward prior, z
 bounded); zfree: Random3-L-zfree (a frozen random decoder, z free: the strongest control on
-the hand's sets). Both at the `cpu` scale's sizes (768 k env steps for two tasks).
+the hand's sets). Both at the `cpu` scale's sizes for 100 train steps (256 k env steps for
+two tasks) with an evaluation every 5: at the `cpu` scale's 300 steps, evaluated every 50,
+both rows are at 0.94-1.00 from the first evaluation on, and the curve shows nothing.
 """
 
 import pathlib
@@ -22,7 +24,7 @@ FILE = HERE.parents[1] / "examples" / "own_set" / "own_set.py"
 def config(method: str, seed: int):
   names = tuple(tasks.load(f"{FILE}:{name}") for name in ("Press", "Rake"))
   base = presets.preset("set1-disco3-linear").replace(tasks=names, seed=seed,
-                                                      **paper.SCALES["cpu"].train)
+                                                      **{**paper.SCALES["cpu"].train, "steps": 100, "eval_every": 5})
   if method == "zfree":
     base = base.replace(freeze_decoder=True, squash_z=False, decoder_init="random")
   return base.validate()
