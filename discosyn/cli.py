@@ -23,6 +23,13 @@ class _Parser(argparse.ArgumentParser):
     self.exit(2, f"{self.prog}: error: {message}\n")
 
 
+def _yes_no(text: str) -> bool:
+  """A true/false flag's value: yes or no (bool("no") would be True)."""
+  if text not in ("yes", "no"):
+    raise argparse.ArgumentTypeError(f"yes or no, not {text!r}")
+  return text == "yes"
+
+
 def build_parser() -> argparse.ArgumentParser:
   from discosyn_jax import config as config_lib
   from experiments import presets  # TrainConfig only, no JAX
@@ -33,7 +40,8 @@ def build_parser() -> argparse.ArgumentParser:
 
   def preset_default(field: str) -> str:
     value = getattr(quick, field)
-    value = " ".join(value) if isinstance(value, tuple) else value
+    value = (" ".join(value) if isinstance(value, tuple) else
+             ("yes" if value else "no") if isinstance(value, bool) else value)
     return f"default: the preset's; quickstart's is {value}"
 
   docs = config_lib.field_docs()  # each field's help, written once beside the field
@@ -50,8 +58,10 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("--hand", help=f"{docs['hand']}; {preset_default('hand')}")
   for flag, field in commands.TRAIN_FLAGS.items():  # the rest of the fields' flags
     kind = type(getattr(quick, field))
-    p.add_argument(f"--{flag.replace('_', '-')}", type=None if kind is str else kind,
-                   choices=choices.get(field), help=f"{docs[field]}; {preset_default(field)}")
+    p.add_argument(f"--{flag.replace('_', '-')}",
+                   type={str: None, bool: _yes_no}.get(kind, kind), choices=choices.get(field),
+                   metavar="{yes,no}" if kind is bool else None,
+                   help=f"{docs[field]}; {preset_default(field)}")
   p.add_argument("--decoder-from", help="learn in the frozen synergy space of a run folder or a "
                  "synergy file (.npz): its decoder, no discriminator bonus or decoder entropy "
                  "(default: none, the decoder is learned)")

@@ -103,7 +103,7 @@ TRAIN_FLAGS = {
     "eval_envs": "eval_envs", "checkpoint_every": "checkpoint_every",
     "decoder_weight_decay": "decoder_weight_decay",
     "decoder_weight_decay_steps": "decoder_weight_decay_steps",
-    "decoder_init": "decoder_init",
+    "decoder_init": "decoder_init", "freeze_decoder": "freeze_decoder", "squash_z": "squash_z",
 }
 
 

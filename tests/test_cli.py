@@ -99,10 +99,23 @@ def test_the_train_flags_help_is_their_fields_own_documentation():
     assert docs[field] and helps[flag].startswith(docs[field] + "; default: the preset's"), flag
 
 
+def test_the_strongest_control_is_two_flags_away():
+  """A frozen random decoder with z free (the strongest control on the hand's sets) from the
+  command line, for a task set of one's own as for ours."""
+  args = cli.build_parser().parse_args(["train", "--preset", "set1-disco3-linear", "--freeze-decoder",
+                                        "yes", "--squash-z", "no", "--decoder-init", "random"])
+  config = commands.train_config(args)
+  assert (config.freeze_decoder, config.squash_z, config.decoder_init) == (True, False, "random")
+  args = cli.build_parser().parse_args(["train", "--preset", "set1-disco3-linear"])
+  assert (commands.train_config(args).freeze_decoder, commands.train_config(args).squash_z) == (False, True)
+
+
 @pytest.mark.parametrize("argv, line", [
     (["train", "--decoder-init", "bogus"], "discosyn train: error: argument --decoder-init: "
      "invalid choice: 'bogus' (choose from 'random', 'physics', 'reward')"),
     (["train", "--steps", "x"], "discosyn train: error: argument --steps: invalid int value: 'x'"),
+    (["train", "--squash-z", "False"], "discosyn train: error: argument --squash-z: yes or no, "
+     "not 'False'"),
     (["bogus"], "discosyn: error: argument command: invalid choice: 'bogus'"),
 ])
 def test_a_bad_flag_is_one_line_and_exit_status_2(argv, line, capsys):
