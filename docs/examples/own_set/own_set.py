@@ -21,30 +21,39 @@ from tasks import common
 HERE = pathlib.Path(__file__).parent
 
 
+class _Slide(Task):
+  """What both tasks share: the hand, and one object on a slide joint named `joint`."""
+  joint = ""
+
+  def bind(self, model):
+    self.hand = common.HandJoints(model)
+    self.object_qpos, self.object_qvel = common.joint_address(model, self.joint)
+
+  def initial_state(self, rng):
+    return self.hand.start_qpos(rng, self.config.hand_noise), self.hand.zero_qvel(), {}
+
+
 @dataclasses.dataclass(frozen=True)
 class PressConfig(TaskConfig):
   success_depth: float = 0.04  # m the button is held down at the episode's end
 
 
-class Press(Task):
+class Press(_Slide):
   scene = HERE / "press.xml"
   config_class = PressConfig
   summary = "press a sprung button 4 cm down and hold it"
+  joint = "button"
 
   def bind(self, model):
-    self.hand = common.HandJoints(model)
-    self.button_qpos, self.button_qvel = common.joint_address(model, "button")
+    super().bind(model)
     self.travel = float(-model.joint("button").range[0])
 
-  def initial_state(self, rng):
-    return self.hand.start_qpos(rng, self.config.hand_noise), self.hand.zero_qvel(), {}
-
   def _depth(self, view):
-    return -view.qpos[self.button_qpos]
+    return -view.qpos[self.object_qpos]
 
   def observation(self, view, info):
     return jnp.concatenate([view.qpos[self.hand.qpos],
-                            jnp.stack([self._depth(view) / self.travel, view.qvel[self.button_qvel]])])
+                            jnp.stack([self._depth(view) / self.travel, view.qvel[self.object_qvel]])])
 
   def reward_terms(self, prev, view, info):
     # the depth held, each step: pressing and holding pays, a tap barely does
@@ -60,24 +69,18 @@ class RakeConfig(TaskConfig):
   max_rewarded_speed: float = 0.2  # m/s
 
 
-class Rake(Task):
+class Rake(_Slide):
   scene = HERE / "rake.xml"
   config_class = RakeConfig
   summary = "rake a puck 5 cm along its rail towards the palm"
-
-  def bind(self, model):
-    self.hand = common.HandJoints(model)
-    self.puck_qpos, self.puck_qvel = common.joint_address(model, "puck")
-
-  def initial_state(self, rng):
-    return self.hand.start_qpos(rng, self.config.hand_noise), self.hand.zero_qvel(), {}
+  joint = "puck"
 
   def _raked(self, view):
-    return -view.qpos[self.puck_qpos]  # the rail's -y runs towards the palm
+    return -view.qpos[self.object_qpos]  # the rail's -y runs towards the palm
 
   def observation(self, view, info):
     return jnp.concatenate([view.qpos[self.hand.qpos],
-                            jnp.stack([self._raked(view), view.qvel[self.puck_qvel]])])
+                            jnp.stack([self._raked(view), view.qvel[self.object_qvel]])])
 
   def reward_terms(self, prev, view, info):
     moved = self._raked(view) - self._raked(prev)
