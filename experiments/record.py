@@ -83,9 +83,10 @@ def z_samples(trainer, state, episodes: int = Z_EPISODES,
 def has_z(run_dir: pathlib.Path) -> bool:
   """Whether `z_of` can give the run's z samples: its z.npz, or a checkpoint to draw them
   from (a folder of logs alone has neither)."""
+  from discosyn_jax.run import checkpoints
+
   run_dir = pathlib.Path(run_dir)
-  return ((run_dir / layout.Z_FILE).is_file() or (run_dir / layout.FINAL).is_dir()
-          or any((run_dir / layout.PERIODIC).glob("*")))
+  return (run_dir / layout.Z_FILE).is_file() or bool(checkpoints.candidates(run_dir))
 
 
 def z_of(run_dir: pathlib.Path, make_trainer: Callable | None = None) -> dict[str, np.ndarray]:

@@ -262,8 +262,7 @@ def frozen_table(group: list[Run], threshold: float, first_rewards: bool) -> str
     for task in dict.fromkeys(t for r in runs for t in r.config.tasks):
       with_task = sorted((r for r in runs if task in r.config.tasks), key=lambda r: r.seed)
       final = _success(with_task, task)
-      curve = np.array([np.mean([row[f"{task}/success"] for row in r.evals])
-                        for r in with_task if r.evals])
+      curve = np.array([_mean_success(r, [task], over_curve=True) for r in with_task if r.evals])
       cells = [f"{_percent(final)} [{final.size}]", f"{_percent(curve)} [{curve.size}]",
                _steps([steps_to(r, task, threshold) for r in with_task], "not reached")]
       if first_rewards:
