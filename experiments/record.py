@@ -18,13 +18,14 @@ what it leaves out (checkpoints/, final/, plots/, tb/, metrics.jsonl) is never n
 
 from __future__ import annotations
 
+import json
 import pathlib
 import shutil
 from typing import Callable
 
 import numpy as np
 
-from discosyn_jax import config as config_lib
+from discosyn_jax import atomic, config as config_lib
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.run import layout, logs
 
@@ -54,7 +55,8 @@ def write(run_dir: pathlib.Path, trainer, state) -> None:
     return
   decoder = jax.device_get(state.params["params"]["synergy_decoder"])
   fitting.save(run_dir / layout.DECODER_FILE, decoder,
-               {k: getattr(config, k) for k in fitting.ARCHITECTURE}, step=int(state.step))
+               {k: getattr(config, k) for k in fitting.ARCHITECTURE}, step=int(state.step),
+               decoder_init=config.decoder_init)  # its start names the frozen rows it feeds
   if not config.freeze_decoder:
     z = {task: samples.astype(np.float16) for task, samples in z_samples(trainer, state).items()}
     tmp = run_dir / (layout.Z_FILE + ".new.npz")  # written whole, then renamed
@@ -149,6 +151,17 @@ def _record_of(folder: pathlib.Path) -> list[str] | None:
   return None
 
 
+def _relative_decoder_from(folder: pathlib.Path, config_file: pathlib.Path) -> None:
+  """A kept config names a decoder of its own experiment by its sibling folder
+  (../<folder>/<file>), not by the path of the machine it was made on (saved_config finds
+  it there)."""
+  fields = json.loads(config_file.read_text())
+  source = pathlib.Path(fields.get("decoder_from") or ".")
+  if fields.get("decoder_from") and (folder.parent / source.parent.name / source.name).is_file():
+    fields["decoder_from"] = f"../{source.parent.name}/{source.name}"
+    atomic.write_text(config_file, json.dumps(fields, indent=1))
+
+
 def keep(out: pathlib.Path, dest: pathlib.Path, log=print) -> list[pathlib.Path]:
   """Copy the record of every step folder of `out` into a folder of the same name in
   `dest` (files there replaced); return those folders. A run without a record is named
@@ -171,6 +184,8 @@ def keep(out: pathlib.Path, dest: pathlib.Path, log=print) -> list[pathlib.Path]
     target.mkdir(parents=True, exist_ok=True)
     for name in names:
       shutil.copyfile(folder / name, target / name)
+    if layout.CONFIG_FILE in names:
+      _relative_decoder_from(folder, target / layout.CONFIG_FILE)
     kept.append(target)
   if not kept:
     raise ValueError(f"{out} holds no finished run or fit to keep")

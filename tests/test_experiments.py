@@ -393,6 +393,11 @@ def test_all_runs_every_row_of_the_papers_tables_once(tmp_path):
     whole = {name: planner.plan(name) for name in ("discosyn-set1", "sparse", "transfer")}
   names = [s.name for s in steps]
   assert len(names) == len(set(names))  # no folder twice
+  # a frozen row is named by its decoder's start; the frozen decoder is read, not started
+  frozen = {s.name: s for s in steps if s.meta["method"].endswith(" frozen")}
+  assert {s.meta["method"] for s in frozen.values()} == {"DiscoSyn3-L-reward frozen",
+                                                         "DiscoSyn6-L-reward frozen"}
+  assert all(s.config.decoder_init == "random" for s in frozen.values())
   rows = lambda task_set: {s.meta["method"] for s in steps if s.meta["set"] == task_set
                            and s.meta["experiment"].split("-")[0] in ("discosyn", "baselines")}
   for task_set, paper_rows in paper.PAPER_ROWS.items():
@@ -440,6 +445,10 @@ def test_a_folder_of_records_continues_and_reports_without_checkpoints(experimen
                                                        "metrics.jsonl/", "actions.npz"))
   assert not any(f.endswith("metrics.jsonl") for f in files) and not messages
   assert max((kept / f).stat().st_size for f in files) < 100_000
+  # a kept frozen run names its decoder by the sibling folder, not by this machine's path
+  for step in ("sparse-synergies-seed0", "pca4-set1-seed0"):
+    named = json.loads((kept / step / "config.json").read_text())["decoder_from"]
+    assert named.startswith("../") and str(experiments) not in named
   # the records alone: every step is done (the frozen run's decoder found where its source
   # moved), nothing is trained
   logged = []

@@ -207,7 +207,7 @@ def read(path: str | pathlib.Path) -> tuple[dict[str, Any], dict]:
     config, _, flat = reading.read_run(path, lambda c: checkpoints.read_arrays(c, _RUN_DECODER))
     if config.decoder == "identity":
       raise ValueError(f"{path} is a full-action run: it has no synergy decoder")
-    meta = {k: getattr(config, k) for k in ARCHITECTURE}
+    meta = {k: getattr(config, k) for k in (*ARCHITECTURE, "decoder_init")}
   elif path.is_file():
     try:
       with np.load(path) as data:
