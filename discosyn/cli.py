@@ -125,6 +125,7 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("name", help="all: the rows of the paper's tables with today's defaults "
                  "(paper.PAPER_ROWS: set #1's DiscoSyn, its controls and the baselines, then "
                  "the sparse valve and transfer from each seed's default decoder, set #2 last); "
+                 "table1 | table2: one table's rows, the same steps as all's (a part of it); "
                  "discosyn-set1 | discosyn-set2 (every start and control tried) | "
                  "baselines-set1 | baselines-set2 | transfer | sparse; the planted-synergy "
                  "test bed: discosyn-planted | discosyn-planted_slack")

@@ -23,9 +23,11 @@
   sparse                 the sparse goal valve: frozen set-#1 synergies (the same decoder), a
                          frozen random decoder of the same size (z bounded, and z free),
                          full-action PPO
-  all                    the paper's rows with today's defaults (PAPER_ROWS, not every start
-                         and control discosyn-<set> tries): set #1's rows, the sparse valve,
-                         transfer, set #2's rows (last: its runs are the long ones)
+  table1 / table2        a table's rows with today's defaults (PAPER_ROWS, not every start
+                         and control discosyn-<set> tries): DiscoSyn, its controls and the
+                         sequential baselines, the same steps and folders as in `all`
+  all                    table1, the sparse valve, transfer, table2 (last: its runs are the
+                         long ones)
 
 Every step writes into its own folder of OUT (`<method>-<set>-seed<n>`). A step whose folder
 holds a finished run of the same config is kept, whether by its final checkpoint or by its
@@ -358,11 +360,12 @@ class Planner:
     return [step for step in (source, frozen, *controls, scratch) if step is not None]
 
   def plan(self, experiment: str) -> list:
+    if experiment in TABLES:  # one table's rows: a part of `all` that fits a session or two
+      task_set = TABLES[experiment]
+      return select(self.plan(f"discosyn-{task_set}") + self.plan(f"baselines-{task_set}"),
+                    PAPER_ROWS[task_set])
     if experiment == "all":  # set #2 last: its runs are the long ones
-      parts = [select(self.plan("discosyn-set1") + self.plan("baselines-set1"),
-                      PAPER_ROWS["set1"]), self.plan("sparse"), self.plan("transfer"),
-               select(self.plan("discosyn-set2") + self.plan("baselines-set2"),
-                      PAPER_ROWS["set2"])]
+      parts = [self.plan(part) for part in ("table1", "sparse", "transfer", "table2")]
       steps: dict[str, Any] = {}  # a step parts share (the decoder transfer freezes) runs once
       for step in (step for part in parts for step in part):
         steps.setdefault(step.name, step)
@@ -390,8 +393,9 @@ class Planner:
     raise ValueError(f"unknown experiment {experiment!r}; experiments: {', '.join(EXPERIMENTS)}")
 
 
+TABLES = {"table1": "set1", "table2": "set2"}  # the paper's tables: PAPER_ROWS of a set
 EXPERIMENTS = ("discosyn-set1", "discosyn-set2", "baselines-set1", "baselines-set2", "transfer",
-               "sparse", "all", "discosyn-planted", "discosyn-planted_slack")
+               "sparse", *TABLES, "all", "discosyn-planted", "discosyn-planted_slack")
 
 
 def select(steps: list, methods) -> list:

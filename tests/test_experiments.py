@@ -391,8 +391,16 @@ def test_all_runs_every_row_of_the_papers_tables_once(tmp_path):
     planner = paper.Planner(tmp_path, "cpu", 0)
     steps = planner.plan("all")
     whole = {name: planner.plan(name) for name in ("discosyn-set1", "sparse", "transfer")}
+    tables = [planner.plan("table1"), planner.plan("table2")]
   names = [s.name for s in steps]
   assert len(names) == len(set(names))  # no folder twice
+  # its parts: the tables' steps (folders, configs, needs) are all's, table #1 first, table
+  # #2 last but its default row (transfer freezes that one's decoder, so it runs earlier)
+  planned = {s.name: s for s in steps}
+  assert all(planned[s.name] == s for table in tables for s in table)
+  assert names[:len(tables[0])] == [s.name for s in tables[0]]
+  late = [s.name for s in tables[1] if s.name != "discosyn6-l-reward-set2-seed0"]
+  assert names[-len(late):] == late
   # a frozen row is named by its decoder's start; the frozen decoder is read, not started
   frozen = {s.name: s for s in steps if s.meta["method"].endswith(" frozen")}
   assert {s.meta["method"] for s in frozen.values()} == {"DiscoSyn3-L-reward frozen",
