@@ -106,8 +106,8 @@ SCALES = {
     # a 2-core CPU: 1.5 M env steps for a four-task run of set #1, ~12 min with two runs side
     # by side (2026-11-30); Table I at this scale (DiscoSyn, its random-decoder controls and
     # the baselines: 13 runs x 3 seeds) takes about 4 hours, the sparse valve ~20 min more.
-    # Set #2 trains 4x as long (6.1 M env steps, ~30 min a run two side by side): full-action
-    # PPO needs that for the dice (80 % at 2.8 M / 5.4 M env steps on 2 seeds; at 1x it
+    # Set #2 trains 4x as long (6.1 M env steps, 36-52 min a run two side by side): full-action
+    # PPO needs that for the dice (80 % at 2.8 M / 5.4 M env steps on 2 seeds of 3; at 1x it
     # stands at 0.50, docs/TRAINING_NOTES.md "A budget for set #2").
     "cpu": Scale(dict(num_envs=64, unroll_length=20, num_minibatches=4, update_epochs=4,
                       steps=300, eval_every=50, eval_envs=32, checkpoint_every=100), 32, 3000,

@@ -156,8 +156,10 @@ def _relative_decoder_from(folder: pathlib.Path, config_file: pathlib.Path) -> N
   (../<folder>/<file>), not by the path of the machine it was made on (saved_config finds
   it there)."""
   fields = json.loads(config_file.read_text())
-  source = pathlib.Path(fields.get("decoder_from") or ".")
-  if fields.get("decoder_from") and (folder.parent / source.parent.name / source.name).is_file():
+  if not fields.get("decoder_from"):
+    return
+  source = pathlib.Path(fields["decoder_from"])
+  if (folder.parent / source.parent.name / source.name).is_file():
     fields["decoder_from"] = f"../{source.parent.name}/{source.name}"
     atomic.write_text(config_file, json.dumps(fields, indent=1))
 
