@@ -336,7 +336,7 @@ class Planner:
       source, path = None, self.decoder_from
     else:
       source = self.discosyn(source_set, b, kind)
-      meta = {k: getattr(source.config, k) for k in (*fitting.ARCHITECTURE, "decoder_init")}
+      meta = fitting.meta_of(source.config)
       path = self.out / source.name / layout.DECODER_FILE  # the record of its run
     method = fitting.method_name(meta)  # with its start: "DiscoSyn3-L-reward frozen"
     # folders: transfer-synergies-set1-seed0 (unseen tasks of set #1), sparse-synergies-seed0

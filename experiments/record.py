@@ -54,9 +54,9 @@ def write(run_dir: pathlib.Path, trainer, state) -> None:
   if config.decoder == "identity":
     return
   decoder = jax.device_get(state.params["params"]["synergy_decoder"])
-  fitting.save(run_dir / layout.DECODER_FILE, decoder,
-               {k: getattr(config, k) for k in fitting.ARCHITECTURE}, step=int(state.step),
-               decoder_init=config.decoder_init)  # its start names the frozen rows it feeds
+  meta = fitting.meta_of(config)  # its start too: it names the frozen rows it feeds
+  fitting.save(run_dir / layout.DECODER_FILE, decoder, meta, step=int(state.step),
+               decoder_init=meta["decoder_init"])
   if not config.freeze_decoder:
     z = {task: samples.astype(np.float16) for task, samples in z_samples(trainer, state).items()}
     tmp = run_dir / (layout.Z_FILE + ".new.npz")  # written whole, then renamed
@@ -114,9 +114,14 @@ def saved_config(run_dir: pathlib.Path) -> TrainConfig:
   config = config_lib.load(run_dir / layout.CONFIG_FILE)
   if not config.decoder_from:
     return config
-  source = pathlib.Path(config.decoder_from)
-  sibling = run_dir.resolve().parent / source.parent.name / source.name
+  sibling = _sibling(run_dir, config.decoder_from)
   return config.replace(decoder_from=str(sibling)) if sibling.is_file() else config
+
+
+def _sibling(run_dir: pathlib.Path, decoder_from: str) -> pathlib.Path:
+  """Where `decoder_from` (<folder>/<file>, wherever it was made) lies beside `run_dir`."""
+  source = pathlib.Path(decoder_from)
+  return pathlib.Path(run_dir).resolve().parent / source.parent.name / source.name
 
 
 def complete(run_dir: pathlib.Path, config: TrainConfig) -> bool:
@@ -158,9 +163,9 @@ def _relative_decoder_from(folder: pathlib.Path, config_file: pathlib.Path) -> N
   fields = json.loads(config_file.read_text())
   if not fields.get("decoder_from"):
     return
-  source = pathlib.Path(fields["decoder_from"])
-  if (folder.parent / source.parent.name / source.name).is_file():
-    fields["decoder_from"] = f"../{source.parent.name}/{source.name}"
+  sibling = _sibling(folder, fields["decoder_from"])
+  if sibling.is_file():
+    fields["decoder_from"] = f"../{sibling.parent.name}/{sibling.name}"
     atomic.write_text(config_file, json.dumps(fields, indent=1))
 
 

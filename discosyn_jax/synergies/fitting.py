@@ -38,6 +38,12 @@ def architecture(fields: dict[str, Any]) -> dict[str, Any]:
   """The ARCHITECTURE fields of a meta or a dict of config fields, defaults filled in."""
   fields = {**_DEFAULTS, **fields}
   return {k: fields[k] for k in ARCHITECTURE}
+
+
+def meta_of(config) -> dict[str, Any]:
+  """A run's decoder as a synergy file's meta: its architecture and its start (the start
+  names the rows that freeze it, method_name)."""
+  return {k: getattr(config, k) for k in (*ARCHITECTURE, "decoder_init")}
 _RUN_DECODER = "params.params.synergy_decoder."
 
 
@@ -207,7 +213,7 @@ def read(path: str | pathlib.Path) -> tuple[dict[str, Any], dict]:
     config, _, flat = reading.read_run(path, lambda c: checkpoints.read_arrays(c, _RUN_DECODER))
     if config.decoder == "identity":
       raise ValueError(f"{path} is a full-action run: it has no synergy decoder")
-    meta = {k: getattr(config, k) for k in (*ARCHITECTURE, "decoder_init")}
+    meta = meta_of(config)
   elif path.is_file():
     try:
       with np.load(path) as data:
