@@ -7,7 +7,7 @@ import json
 import pathlib
 import sys
 
-sys.path.insert(0, "/work/main")
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[3]))  # the repository
 from discosyn_jax import config as config_lib
 from discosyn_jax.training import loop
 from discosyn_jax.training.train import Trainer

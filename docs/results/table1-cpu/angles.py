@@ -6,7 +6,7 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, "/work/main")
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[3]))  # the repository
 from discosyn_jax.synergies import fitting
 from discosyn_jax.synergies.diagnostics import principal_cosines
 

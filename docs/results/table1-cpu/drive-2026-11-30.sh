@@ -1,7 +1,7 @@
 #!/bin/bash
 # Table I (set #1) + sparse at the cpu scale, 3 seeds, as two interleaved queues
-D=/work/main/.venv/bin/discosyn; O=/work/runs/table1-cpu
-cd /work/main
+D=discosyn; O=runs/table1-cpu
+cd "$(git rev-parse --show-toplevel)"
 if [ "$1" = A ]; then
   $D experiment discosyn-set1 --seeds 0 --out $O && \
   $D experiment baselines-set1 --seeds 1 --out $O && \
