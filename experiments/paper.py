@@ -18,11 +18,10 @@
                          AE6 spaces (a = the decoder's mean, no noise outside the space)
   transfer               unseen tasks with a frozen DiscoSyn decoder, each seed's default
                          (set #1's DiscoSyn3-L-reward for the two valves, set #2's
-                         DiscoSyn6-L-reward for the top-down screw), beside full-action PPO
-                         from scratch on the same tasks and budget
-  sparse                 the sparse goal valve: frozen set-#1 synergies (the same decoder), a
-                         frozen random decoder of the same size (z bounded, and z free),
-                         full-action PPO
+                         DiscoSyn6-L-reward for the top-down screw), beside a frozen random
+                         decoder of the same size (z bounded, and z free) and full-action
+                         PPO from scratch on the same tasks and budget
+  sparse                 the sparse goal valve: the same rows, from set #1's decoder
   table1 / table2        a table's rows with today's defaults (PAPER_ROWS, not every start
                          and control discosyn-<set> tries): DiscoSyn, its controls and the
                          sequential baselines, the same steps and folders as in `all`
@@ -275,10 +274,8 @@ class Planner:
     config = learned.config.replace(freeze_decoder=True, decoder_from="", decoder_weight_decay=0.0,
                                     decoder_weight_decay_steps=0, decoder_init="random").validate()
     method = fitting.method_name(config)
-    label = task_set.removeprefix("unseen-")
-    name = (f"{experiment}-random-{self.tag}" if label == experiment
-            else self._folder(method, task_set))
-    return Train(name, config, _meta(experiment, method, task_set, self.seed, self.scale))
+    return Train(self._folder(method, task_set), config,
+                 _meta(experiment, method, task_set, self.seed, self.scale))
 
   def controls(self, learned: Train, task_set: str, experiment: str) -> list:
     """A DiscoSyn run's controls (module docstring): Random, Random-zfree where the run
@@ -328,7 +325,8 @@ class Planner:
     return steps
 
   def frozen_synergies(self, task_set: str, experiment: str) -> list:
-    """The source DiscoSyn run, then a frozen-decoder run and a full-action run on `task_set`."""
+    """The source DiscoSyn run, then a frozen-decoder run, its random controls and a
+    full-action run on `task_set`."""
     source_set, b, kind = TRANSFER_FROM[task_set]
     base = presets.preset(f"{source_set}-disco{b}-{kind}")
     if self.decoder_from:
@@ -349,14 +347,15 @@ class Planner:
                    needs=(source.name,) if source else ())
     scratch = self.ppo(task_set, experiment)
     scratch = dataclasses.replace(scratch, name=folder("ppo"))
-    controls = []
-    if experiment == "sparse":  # the learned space against a random one of the same size,
-      random = self.random_decoder(frozen, task_set, experiment)  # z bounded as it is,
-      controls = [random]
-      if random.config.squash_z:  # and z free: the stronger of the two is the control
-        method = f"{random.meta['method']}-zfree"
-        controls.append(Train(folder("random-zfree"), random.config.replace(squash_z=False),
-                              _meta(experiment, method, task_set, self.seed, self.scale)))
+    # the learned space against a random one of the same size, z bounded as it is, and z
+    # free: the stronger of the two is the control
+    random = dataclasses.replace(self.random_decoder(frozen, task_set, experiment),
+                                 name=folder("random"))
+    controls = [random]
+    if random.config.squash_z:
+      method = f"{random.meta['method']}-zfree"
+      controls.append(Train(folder("random-zfree"), random.config.replace(squash_z=False),
+                            _meta(experiment, method, task_set, self.seed, self.scale)))
     return [step for step in (source, frozen, *controls, scratch) if step is not None]
 
   def plan(self, experiment: str) -> list:

@@ -426,6 +426,12 @@ def test_all_runs_every_row_of_the_papers_tables_once(tmp_path):
     assert by_name[frozen].needs == (source,) and names.index(source) < names.index(frozen)
     assert by_name[frozen].config.decoder_from == str(tmp_path.resolve() / source / "decoder.npz")
     assert by_name[source].meta["method"] in paper.PAPER_ROWS[by_name[source].meta["set"]]
+    # beside it, in its own experiment's folders: the random decoder of the same size with z
+    # bounded as the frozen space has it, and with z free
+    for kind, squash_z in (("random", True), ("random-zfree", False)):
+      control = by_name[frozen.replace("synergies", kind)]
+      assert control.meta["experiment"] == by_name[frozen].meta["experiment"]
+      assert control.config == by_name[frozen].config.replace(decoder_from="", squash_z=squash_z)
   shared = [s for plan in whole.values() for s in plan if s.name in by_name]
   assert all(by_name[s.name] == s for s in shared)
   # discosyn-set1 alone is every start and control tried
