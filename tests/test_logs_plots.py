@@ -54,6 +54,17 @@ def test_an_archived_log_reads_as_the_log_itself(toy_run, tmp_path):
   (tmp_path / (layout.METRICS_FILE + logs.ARCHIVED)).write_bytes(lzma.compress(plain.read_bytes()))
   assert not kept.exists() and logs.read_log(kept) == rows
   assert logs.read_log(tmp_path / layout.EVAL_FILE) == []
+  # a record's archive (`archive`): the same rows, fractions to 5 significant digits, counts
+  # and steps exact; the log itself stays
+  archived = logs.read_jsonl(logs.archive(plain))
+  assert plain.is_file() and len(archived) == len(rows)
+  for row, kept_row in zip(rows, archived):
+    assert kept_row.keys() == row.keys()
+    for key, value in row.items():
+      exact = not isinstance(value, float) or value.is_integer()
+      assert kept_row[key] == (value if exact else pytest.approx(value, rel=1e-4, abs=0))
+      if not exact:
+        assert len(repr(abs(kept_row[key])).replace(".", "").lstrip("0").split("e")[0]) <= 5
 
 
 def test_tensorboard_holds_the_jsonl_numbers_over_env_steps(toy_run):
