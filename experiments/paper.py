@@ -102,9 +102,9 @@ SCALES = {
     # seconds per run: the pipeline's plumbing, nothing learned
     "ci": Scale(dict(num_envs=4, unroll_length=5, num_minibatches=2, update_epochs=1, steps=2,
                      eval_every=1, eval_envs=2, checkpoint_every=0), 2, 50, (0,)),
-    # a 2-core CPU: 1.5 M env steps for a four-task run of set #1, ~12 min with two runs side
-    # by side (2026-11-30); Table I at this scale (DiscoSyn, its random-decoder controls and
-    # the baselines: 13 runs x 3 seeds) takes about 4 hours, the sparse valve ~20 min more.
+    # a 2-core CPU: 1.5 M env steps for a four-task run of set #1, 4-6 min with two runs side
+    # by side; Table I at this scale (17 runs and a fit a seed) takes 1.5 h a seed, two seeds
+    # side by side (2026-12-03), the sparse valve and transfer ~30 min a seed more.
     # Set #2 trains 4x as long (6.1 M env steps, 36-52 min a run two side by side): full-action
     # PPO needs that for the dice (80 % at 2.8 M / 5.4 M env steps on 2 seeds of 3; at 1x it
     # stands at 0.50, docs/TRAINING_NOTES.md "A budget for set #2").
