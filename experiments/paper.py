@@ -277,6 +277,13 @@ class Planner:
     return Train(self._folder(method, task_set), config,
                  _meta(experiment, method, task_set, self.seed, self.scale))
 
+  def zfree(self, random: Train, name: str = "") -> Train:
+    """The control `random` with z free (the stronger of the two): the same frozen decoder,
+    the heads' z unbounded; in folder `name`, else in its method's."""
+    method = f"{random.meta['method']}-zfree"
+    return Train(name or self._folder(method, random.meta["set"]),
+                 random.config.replace(squash_z=False).validate(), {**random.meta, "method": method})
+
   def controls(self, learned: Train, task_set: str, experiment: str) -> list:
     """A DiscoSyn run's controls (module docstring): Random, Random-zfree where the run
     bounds z, and for a linear decoder Random-matched with the step that writes its decoder."""
@@ -284,9 +291,7 @@ class Planner:
     steps = [random]
     meta = lambda method: _meta(experiment, method, task_set, self.seed, self.scale)
     if learned.config.squash_z:
-      method = f"{random.meta['method']}-zfree"
-      steps.append(Train(self._folder(method, task_set),
-                         random.config.replace(squash_z=False).validate(), meta(method)))
+      steps.append(self.zfree(random))
     if learned.config.decoder_init != "random":  # the prior's start frozen: what learning adds
       prior = random.config.replace(decoder_init=learned.config.decoder_init).validate()
       method = fitting.method_name(prior)
@@ -351,11 +356,8 @@ class Planner:
     # free: the stronger of the two is the control
     random = dataclasses.replace(self.random_decoder(frozen, task_set, experiment),
                                  name=folder("random"))
-    controls = [random]
-    if random.config.squash_z:
-      method = f"{random.meta['method']}-zfree"
-      controls.append(Train(folder("random-zfree"), random.config.replace(squash_z=False),
-                            _meta(experiment, method, task_set, self.seed, self.scale)))
+    controls = [random] + ([self.zfree(random, folder("random-zfree"))]
+                           if random.config.squash_z else [])
     return [step for step in (source, frozen, *controls, scratch) if step is not None]
 
   def plan(self, experiment: str) -> list:
