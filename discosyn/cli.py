@@ -120,8 +120,8 @@ def build_parser() -> argparse.ArgumentParser:
       "of records (docs/results/...) is continued, not retrained; an unfinished step is "
       "resumed. Every run ends by writing its record, and a later step reads the records of "
       "those before it (a matched or transferred decoder its decoder.npz, a fitted space its "
-      "synergy file; only a fit rolls out its PPO run's checkpoint); `discosyn report` needs "
-      "no checkpoint.")
+      "synergy file; only a fit rolls out its PPO run's checkpoint, and a PPO run kept as a "
+      "record alone is trained again for it); `discosyn report` needs no checkpoint.")
   p.add_argument("name", help="all: the rows of the paper's tables with today's defaults "
                  "(paper.PAPER_ROWS: set #1's DiscoSyn, its controls and the baselines, then "
                  "the sparse valve and transfer from each seed's default decoder, set #2 last); "

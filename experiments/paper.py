@@ -34,7 +34,8 @@ record alone (experiments/record.py: what a run ends by writing, and what `disco
 copies to be committed); an unfinished one is resumed, so an interrupted `all` is continued
 by running it again, in a fresh clone from the committed records too. A later step reads
 the records of those before it (decoder.npz, a fit's synergy files); only a fit reads a
-checkpoint (it rolls out its PPO run). Each run folder gets an `experiment.json`
+checkpoint (it rolls out its PPO run: one kept as a record alone, as in a fresh clone, is
+trained again, from step 0, before its fit). Each run folder gets an `experiment.json`
 (experiment, method, set, seed, scale) that `discosyn report` reads.
 
 One file over 300 lines on purpose: the steps (Train, Fit, Match) and the plans built from
@@ -442,9 +443,13 @@ def run(experiment: str, out: pathlib.Path, scale: str, seeds=None, *,
     plans = [select(steps, methods) for steps in plans]
   folders = []
   for steps in plans:
+    again = _trained_again(steps, out)
     for step in steps:
       folders.append(out / step.name)
-      if step.done(out):
+      if step.name in again:
+        log(f"[{step.name}] finished, but its record alone is here: its fit rolls out the "
+            f"trained policy, which only a checkpoint keeps; trained again")
+      elif step.done(out):
         log(f"[{step.name}] done already; kept")
         if isinstance(step, Train):
           step.settle(out, make_trainer, log)
@@ -452,3 +457,10 @@ def run(experiment: str, out: pathlib.Path, scale: str, seeds=None, *,
       log(f"[{step.name}] {type(step).__name__.lower()}")
       step.run(out, make_trainer, progress, log)
   return folders
+
+
+def _trained_again(steps: list, out: pathlib.Path) -> set[str]:
+  """The full-action runs an unfinished fit reads that are finished by their record alone
+  (no final checkpoint): the fit needs the policy, which a record does not keep."""
+  return {step.source for step in steps if isinstance(step, Fit) and not step.done(out)
+          and not (out / step.source / layout.FINAL).is_dir()}

@@ -484,6 +484,19 @@ def test_a_folder_of_records_continues_and_reports_without_checkpoints(experimen
   paper.run("sparse", kept, "ci", make_trainer=make_trainer, task_sets=SETS, log=lambda *a: None)
   np.testing.assert_array_equal(final_decoder(kept / "sparse-synergies-seed0")["synergies.kernel"],
                                 final_decoder(source)["synergies.kernel"])
+  # a fit not kept: its PPO run, a record alone, is trained again (from step 0, to the same
+  # evaluations) to be rolled out; the frozen rows of the fit stay done
+  shutil.rmtree(kept / "synergies-set1-seed0")
+  logged = []
+  paper.run("baselines-set1", kept, "ci", make_trainer=make_trainer, task_sets=SETS,
+            methods=["PCA4"], log=logged.append)
+  assert any("ppo-set1-seed0] finished, but its record alone" in line for line in logged)
+  assert "[pca4-set1-seed0] done already; kept" in logged
+  assert (kept / "ppo-set1-seed0" / "final").is_dir()
+  assert (kept / "synergies-set1-seed0" / "explained_variance.json").is_file()
+  drop_clock = lambda rows: [{k: v for k, v in row.items() if k != "wall_s"} for row in rows]
+  assert drop_clock(logs.read_jsonl(kept / "ppo-set1-seed0" / "eval.jsonl")) == \
+      drop_clock(logs.read_jsonl(ppo / "eval.jsonl"))
   with pytest.raises(ValueError, match="is .* or inside it"):
     record.keep(experiments, experiments / "kept")
 
