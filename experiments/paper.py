@@ -461,6 +461,8 @@ def run(experiment: str, out: pathlib.Path, scale: str, seeds=None, *,
 
 def _trained_again(steps: list, out: pathlib.Path) -> set[str]:
   """The full-action runs an unfinished fit reads that are finished by their record alone
-  (no final checkpoint): the fit needs the policy, which a record does not keep."""
+  (no final checkpoint): the fit needs the policy, which a record does not keep. An
+  unfinished one is not among them: it is trained (or resumed) as any step."""
+  by_name = {step.name: step for step in steps}
   return {step.source for step in steps if isinstance(step, Fit) and not step.done(out)
-          and not (out / step.source / layout.FINAL).is_dir()}
+          and by_name[step.source].done(out) and not (out / step.source / layout.FINAL).is_dir()}

@@ -504,6 +504,8 @@ def test_a_folder_of_records_continues_and_reports_without_checkpoints(experimen
 def test_methods_run_with_the_runs_they_need(tmp_path):
   plan = lambda name: paper.Planner(tmp_path, "ci", 0, SETS).plan(name)
   names = lambda steps: [s.name for s in steps]
+  # a PPO run not yet trained is trained as any step, not "trained again" for its fit
+  assert paper._trained_again(plan("baselines-set1"), tmp_path) == set()
   assert names(paper.select(plan("baselines-set1"), ["PCA4"])) == [
       "ppo-set1-seed0", "synergies-set1-seed0", "pca4-set1-seed0"]
   assert names(paper.select(plan("discosyn-set1"), ["Random3-L", "DiscoSyn3-L"])) == [
