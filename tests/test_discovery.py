@@ -242,3 +242,18 @@ def test_the_decayed_variant_is_planned_beside_the_papers_update_with_its_own_ma
     decayed.replace(freeze_decoder=True).validate()
   with pytest.raises(ValueError, match="anneals a decoder_weight_decay"):
     decayed.replace(decoder_weight_decay=0.0).validate()
+
+
+def test_the_gpu_check_trains_a_tables_rows_as_the_experiment_does():
+  from experiments.device import gpu_check
+
+  got = gpu_check.configs(["DiscoSyn3-L-reward", "Random3-L-zfree"], "set1", "gpu", 0, "mjx")
+  default, control = got["DiscoSyn3-L-reward"], got["Random3-L-zfree"]
+  assert default.backend == control.backend == "mjx"
+  assert default.num_envs == control.num_envs == paper.SCALES["gpu"].train["num_envs"]
+  assert default.decoder_init == "reward" and not default.freeze_decoder
+  assert control.freeze_decoder and not control.squash_z and control.decoder_init == "random"
+  assert default.replace(backend="auto") == presets.preset("set1-disco3-linear").replace(
+      tasks=default.tasks, seed=0, **paper.SCALES["gpu"].train_for("set1"))
+  with pytest.raises(ValueError, match="not rows of table2: DiscoSyn3-L-reward"):
+    gpu_check.configs(["DiscoSyn3-L-reward"], "set2", "gpu", 0, "mjx")

@@ -2,20 +2,24 @@
 
   bash experiments/device/wheels.sh          # here, once: the wheels the device image lacks
   # on the device (docs/SCALING.md has the exact call):
-  python3 experiments/device/gpu_check.py --budget-s 420 --out $OUT
+  python3 experiments/device/gpu_check.py --methods DiscoSyn3-L-reward --budget-s 500 --out $OUT
 
-In order, each result one JSON line in OUT/gpu_check.jsonl as soon as it is measured (a run
-cut short keeps what it measured):
+Each result one JSON line in OUT/gpu_check.jsonl as soon as it is measured (a run cut
+short keeps what it measured); the methods (--methods: rows of the paper's tables,
+configured as `discosyn experiment` configures them at --scale and --seed) one after the
+other, each trained as soon as it has started. On a cold machine the start of the `gpu`
+scale takes minutes (docs/BENCHMARKS.md, "GPU"): give a call of 15 device-minutes one method.
   versions   python, jax, mujoco, mujoco-mjx, brax, the devices
-  init       Trainer build, `init()`, and the compile of the train step and of the evaluation
-             for PRESET at SCALE (the training this check then runs)
-  physics    MJX env (control) steps/s of the jitted, vmapped `HandEnv.step` in a scan of
-             --physics-steps steps, for every task of the preset at every --batches, and for
-             valve3 at 8192 envs under each of experiments/physics_study.SETTINGS (the modules
-             compile in parallel threads: the machine has many cores, the clock is short)
-  train      one line per train step: env steps, wall seconds, env steps/s, training success
+  start      per method: Trainer build, the physics prior's start where the method has one,
+             `init()`, and the compiles of the train step and of the evaluation
+  physics    (--physics, after the first method's start) MJX env (control) steps/s of the
+             jitted, vmapped `HandEnv.step` in a scan of --physics-steps steps, for every task
+             of the set at every --batches, and for valve3 at one batch under each of
+             experiments/physics_study.SETTINGS (compiled in parallel threads)
+  train      one line per train step (env steps, wall seconds, env steps/s, training
+             success), for the method's equal share of what is left of --budget-s
   eval       deterministic success and return per task every --eval-every train steps and at
-             the end, until --budget-s (counted from the start) runs out
+             the end of the method's share
 """
 
 from __future__ import annotations
@@ -41,7 +45,8 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
 import tasks  # noqa: E402
-from experiments import paper, physics_study, presets  # noqa: E402
+from discosyn_jax.training import loop  # noqa: E402
+from experiments import paper, physics_study  # noqa: E402
 
 
 class Log:
@@ -129,83 +134,117 @@ def measure_physics(log: Log, names, batches, settings, steps: int, threads: int
         env_steps_per_s=label["batch"] * steps / seconds)
 
 
-def main(argv=None):
-  parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-  parser.add_argument("--preset", default="set1-disco3-linear", help="the training preset")
-  parser.add_argument("--scale", default="gpu", choices=list(paper.SCALES),
-                      help="sizes of the training (experiments/paper.py SCALES)")
-  parser.add_argument("--backend", default="mjx", choices=["mjx", "native"],
-                      help="physics of the training (native: a CPU dry run)")
-  parser.add_argument("--batches", type=int, nargs="+", default=[2048, 8192, 16384],
-                      help="envs per task of the physics timings")
-  parser.add_argument("--settings", nargs="*", choices=list(physics_study.SETTINGS),
-                      default=["ref", "8x5", "8x5-it4", "10x4-it4"],
-                      help="physics settings timed on valve3 beside the default (none: skip)")
-  parser.add_argument("--physics-steps", type=int, default=20, help="control steps per timing")
-  parser.add_argument("--no-physics", dest="physics", action="store_false",
-                      help="skip the physics timings (CPU dry runs)")
-  parser.add_argument("--threads", type=int, default=12, help="parallel compiles of the physics")
-  parser.add_argument("--eval-every", type=int, default=10, help="train steps between evaluations")
-  parser.add_argument("--budget-s", type=float, default=420.0,
-                      help="seconds from the start after which training stops (then a final eval)")
-  parser.add_argument("--final-eval-s", type=float, default=30.0,
-                      help="seconds kept back from the budget for the final evaluation")
-  parser.add_argument("--out", default=os.environ.get("OUT", "runs/gpu_check"),
-                      help="folder of gpu_check.jsonl (default: $OUT)")
-  args = parser.parse_args(argv)
-  start = time.perf_counter()
-  log = Log(pathlib.Path(args.out) / "gpu_check.jsonl")
-  log("versions", **versions())
+def configs(methods, task_set: str, scale: str, seed: int, backend: str) -> dict:
+  """{method: TrainConfig} as `discosyn experiment` trains these rows of the set's table."""
+  table = {s: t for t, s in paper.TABLES.items()}[task_set]
+  planner = paper.Planner(pathlib.Path("unused"), scale, seed)
+  steps = {s.meta["method"]: s for s in paper.select(planner.plan(table), methods)
+           if isinstance(s, paper.Train)}
+  missing = [m for m in methods if m not in steps]
+  if missing:
+    raise ValueError(f"not rows of {table}: {', '.join(missing)} "
+                     f"(rows: {', '.join(paper.PAPER_ROWS[task_set])})")
+  return {m: steps[m].config.replace(backend=backend).validate() for m in methods}
 
-  sizes = paper.SCALES[args.scale].train
-  config = presets.preset(args.preset).replace(backend=args.backend, **sizes).validate()
+
+def start_method(log: Log, method: str, config):
+  """The Trainer, its fresh state (from the prior's start where the method has one) and the
+  compiled train step and evaluation, each part timed."""
   trainer, build_s = timed(lambda: tasks.trainer(config))
-  state, init_s = timed(trainer.init)
+  decoder, prior_s = timed(lambda: loop.starting_decoder(trainer))
+  state, init_s = timed(lambda: trainer.init(decoder_params=decoder))
   train_step, compile_s = timed(lambda: trainer.train_step.lower(state).compile())
-  log("init", preset=args.preset, scale=args.scale, backend=trainer.envs[0].backend,
-      num_envs=config.num_envs, env_steps_per_train_step=config.env_steps_per_train_step,
-      build_s=build_s, init_s=init_s, train_compile_s=compile_s,
-      init_plus_compile_s=init_s + compile_s)
   key = jax.random.PRNGKey(0)
   evaluate, eval_compile_s = timed(
       lambda: trainer.evaluate.lower(state.params, state.normalizers, key).compile())
-  log("eval_compile", seconds=eval_compile_s, eval_envs=config.eval_envs)
+  log("start", method=method, backend=trainer.envs[0].backend, num_envs=config.num_envs,
+      env_steps_per_train_step=config.env_steps_per_train_step, decoder_init=config.decoder_init,
+      build_s=build_s, prior_s=prior_s, init_s=init_s, train_compile_s=compile_s,
+      eval_compile_s=eval_compile_s,
+      start_s=build_s + prior_s + init_s + compile_s + eval_compile_s)
+  return config, state, train_step, evaluate
 
-  if args.physics:
-    try:  # a failure here must not cost the training below its share of the call
-      measure_physics(log, config.tasks, args.batches, args.settings, args.physics_steps,
-                      args.threads)
-    except Exception as e:  # noqa: BLE001 - reported, then the check goes on
-      log("physics_failed", error=f"{type(e).__name__}: {e}"[:2000])
+
+def train_method(log: Log, method: str, config, state, train_step, evaluate, seconds: float,
+                 eval_every: int, final_eval_s: float):
+  """Train for `seconds` (the last `final_eval_s` kept for the final evaluation)."""
+  train_start = time.perf_counter()
 
   def run_eval(step):
     key = jax.random.fold_in(jax.random.PRNGKey(config.seed + 1), step)
-    results, seconds = timed(lambda: evaluate(state.params, state.normalizers, key))
+    results, took = timed(lambda: evaluate(state.params, state.normalizers, key))
     results = jax.tree.map(float, jax.device_get(results))
-    log("eval", step=step, env_steps=step * config.env_steps_per_train_step,
-        wall_s=time.perf_counter() - train_start, eval_s=seconds,
+    log("eval", method=method, step=step, env_steps=step * config.env_steps_per_train_step,
+        wall_s=time.perf_counter() - train_start, eval_s=took,
         **{f"{n}/{k}": v for n, r in results.items() for k, v in r.items()})
 
-  train_start = time.perf_counter()
   run_eval(0)
-  deadline = start + args.budget_s - args.final_eval_s
+  deadline = train_start + seconds - final_eval_s
   step = 0
   while time.perf_counter() < deadline and step < config.steps:
     tick = time.perf_counter()
     state, metrics = train_step(state)
     metrics = jax.device_get(metrics)
     step += 1
-    seconds = time.perf_counter() - tick
-    log("train", step=step, env_steps=step * config.env_steps_per_train_step,
+    took = time.perf_counter() - tick
+    log("train", method=method, step=step, env_steps=step * config.env_steps_per_train_step,
         wall_s=time.perf_counter() - train_start,
-        env_steps_per_s=config.env_steps_per_train_step / seconds,
-        finite=bool(metrics["finite"]),
+        env_steps_per_s=config.env_steps_per_train_step / took, finite=bool(metrics["finite"]),
         **{f"{n}/success": float(metrics[f"{n}/success"]) for n in config.tasks})
-    if step % args.eval_every == 0:
+    if step % eval_every == 0:
       run_eval(step)
-  if step % args.eval_every:
+  if step % eval_every:
     run_eval(step)
-  log("done", total_s=time.perf_counter() - start, train_steps=step)
+
+
+def main(argv=None):
+  parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  parser.add_argument("--methods", nargs="+", default=["DiscoSyn3-L-reward", "Random3-L-zfree"],
+                      help="rows of the set's table (experiments/paper.py PAPER_ROWS): the "
+                           "default row and its strongest control")
+  parser.add_argument("--set", default="set1", choices=sorted(paper.TABLES.values()),
+                      help="the task set (its table's rows)")
+  parser.add_argument("--seed", type=int, default=0)
+  parser.add_argument("--scale", default="gpu", choices=list(paper.SCALES),
+                      help="sizes of the training (experiments/paper.py SCALES)")
+  parser.add_argument("--backend", default="mjx", choices=["mjx", "native"],
+                      help="physics of the training (native: a CPU dry run)")
+  parser.add_argument("--physics", action="store_true",
+                      help="also time the MJX physics alone (after the start, before training)")
+  parser.add_argument("--batches", type=int, nargs="+", default=[2048, 8192, 16384],
+                      help="envs per task of the physics timings")
+  parser.add_argument("--settings", nargs="*", choices=list(physics_study.SETTINGS),
+                      default=["ref", "8x5", "8x5-it4", "10x4-it4"],
+                      help="physics settings timed on valve3 beside the default (none: skip)")
+  parser.add_argument("--physics-steps", type=int, default=20, help="control steps per timing")
+  parser.add_argument("--threads", type=int, default=12, help="parallel compiles of the physics")
+  parser.add_argument("--eval-every", type=int, default=10, help="train steps between evaluations")
+  parser.add_argument("--budget-s", type=float, default=480.0,
+                      help="seconds from the start after which the last method stops training")
+  parser.add_argument("--final-eval-s", type=float, default=15.0,
+                      help="seconds of each method's share kept back for its final evaluation")
+  parser.add_argument("--out", default=os.environ.get("OUT", "runs/gpu_check"),
+                      help="folder of gpu_check.jsonl (default: $OUT)")
+  args = parser.parse_args(argv)
+  start = time.perf_counter()
+  try:
+    todo = configs(args.methods, args.set, args.scale, args.seed, args.backend)
+  except ValueError as e:
+    parser.error(str(e))  # one line, exit 2
+  log = Log(pathlib.Path(args.out) / "gpu_check.jsonl")
+  log("versions", **versions())
+
+  for i, (method, config) in enumerate(todo.items()):
+    started = start_method(log, method, config)
+    if args.physics and i == 0:
+      try:  # a failure here must not cost the training below its share of the call
+        measure_physics(log, config.tasks, args.batches, args.settings, args.physics_steps,
+                        args.threads)
+      except Exception as e:  # noqa: BLE001 - reported, then the check goes on
+        log("physics_failed", error=f"{type(e).__name__}: {e}"[:2000])
+    share = (args.budget_s - (time.perf_counter() - start)) / (len(todo) - i)
+    train_method(log, method, *started, share, args.eval_every, args.final_eval_s)
+  log("done", total_s=time.perf_counter() - start)
 
 
 if __name__ == "__main__":
