@@ -86,6 +86,16 @@ def test_the_prior_is_refused_where_it_cannot_start_the_decoder():
     physics_prior.basis([tasks.make("planted0")], 3)
 
 
+def test_the_prior_of_an_mjx_env_is_measured_on_mujoco_c(valve3):
+  """Whatever backend a run trains on, its prior is the reference physics' (and on the CPU):
+  an MJX env gives its native twin's directions."""
+  mjx_valve3 = tasks.make("valve3", backend="mjx")
+  assert physics_prior.reference(mjx_valve3).backend == "native"
+  assert physics_prior.reference(valve3) is valve3
+  np.testing.assert_array_equal(physics_prior.basis([mjx_valve3], 3),
+                                physics_prior.basis([valve3], 3))
+
+
 def test_chunking_the_pushes_changes_nothing(valve3, monkeypatch):
   """The pushes go through lax.map in chunks (MJX memory): chunking changes nothing."""
   whole = physics_prior.jacobians(valve3, "objects")

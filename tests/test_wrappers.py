@@ -54,11 +54,19 @@ def test_pooled_reset_restarts_from_the_pool_without_resetting_the_env():
   the others step on, and the step never calls the env's reset (MJX: no mjx.forward)."""
   base = StopOnSignal(0.0, obs_size=4, episode_length=3)
   env = wrappers.for_training(base, reset_pool=True)
-  state = env.reset(jax.random.split(jax.random.PRNGKey(0), 6))
-  pool_obs = np.asarray(state.info["reset_pool"].obs)
-  assert pool_obs.shape == (6, 4) and not np.allclose(pool_obs, np.asarray(state.obs))
+  keys = jax.random.split(jax.random.PRNGKey(0), 6)
   calls = []
   original = base.reset
+  base.reset = lambda rng: calls.append(1) or original(rng)
+  state = env.reset(keys)
+  assert len(calls) == 1  # the state and its pool from one (batched) reset
+  base.reset = original
+  pool_obs = np.asarray(state.info["reset_pool"].obs)
+  assert pool_obs.shape == (6, 4) and not np.allclose(pool_obs, np.asarray(state.obs))
+  # the state is the one the same keys give without a pool
+  np.testing.assert_array_equal(
+      np.asarray(state.obs), np.asarray(wrappers.for_training(base).reset(keys).obs))
+  calls = []
   base.reset = lambda rng: calls.append(1) or original(rng)
   step = jax.jit(env.step)
   starts = set()

@@ -35,10 +35,17 @@ class FreshResetWrapper(Wrapper):
 
   def reset(self, rng: jax.Array) -> State:
     keys = jax.vmap(jax.random.split)(rng)  # (B, 2, 2): one to reset now, one to keep
-    state = self.env.reset(keys[:, 0])
+    if not self.pool:
+      state = self.env.reset(keys[:, 0])
+    else:
+      # the state and its pool from one reset of 2B rows: on MJX each reset is an
+      # `mjx.forward` for XLA to compile, and init's compile is minutes on a GPU
+      pool_keys = jax.vmap(jax.random.fold_in, (0, None))(keys[:, 1], 1)
+      both = self.env.reset(jnp.concatenate([keys[:, 0], pool_keys]))
+      batch = keys.shape[0]
+      state = jax.tree.map(lambda x: x[:batch], both)
+      state.info["reset_pool"] = jax.tree.map(lambda x: x[batch:], both)
     state.info["reset_key"] = keys[:, 1]
-    if self.pool:
-      state.info["reset_pool"] = self.env.reset(jax.vmap(jax.random.fold_in, (0, None))(keys[:, 1], 1))
     return state
 
   def step(self, state: State, action: jax.Array) -> State:

@@ -9,7 +9,10 @@ the sum over states of J^T J, scaled to trace 1 so that each task counts alike (
 the tasks' metrics make b directions (`pool`: the top-b of their sum, or each task its share
 in turns). The priors a config names are config.PRIORS. A prior depends on the tasks, the
 hand and the physics, never on a training seed, so every seed's decoder starts in the same
-subspace (`start`: each keeps its own random scale, bias and noise).
+subspace (`start`: each keeps its own random scale, bias and noise). It is measured on
+MuJoCo C (the reference physics, on the CPU) whatever backend the run trains on
+(`reference`): a CPU and a GPU run of a set start alike, and MJX on a GPU spent 4 of its
+15 minutes compiling the measurement (docs/BENCHMARKS.md, "GPU").
 """
 
 from __future__ import annotations
@@ -49,13 +52,27 @@ RESPONSES = ("objects", "reward")  # what the pushes are read by (module docstri
 POOLINGS = ("trace", "share")  # how the tasks' metrics make one basis (`pool`)
 
 
+def reference(env):
+  """`env` on MuJoCo C: itself where it is native already (or has no physics)."""
+  if getattr(env, "backend", "native") == "native" or not hasattr(env, "mj_model"):
+    return env
+  return type(env)(env.task, backend="native", hand=env.hand)
+
+
 def jacobians(env, response: str = "objects") -> np.ndarray:
   """(states, outputs, actions): how one control step's outcome answers each action pushed,
-  at states of a random policy. `response` "objects": the velocity of every object dof;
-  "reward": the task's reward of the step, what the task asks for (one output)."""
+  at states of a random policy, on MuJoCo C (`reference`). `response` "objects": the
+  velocity of every object dof; "reward": the task's reward of the step, what the task asks
+  for (one output)."""
   if response not in RESPONSES:
     raise ValueError(f"the prior's response must be one of {', '.join(RESPONSES)}, not "
                      f"{response!r}")
+  env = reference(env)
+  with jax.default_device(jax.devices("cpu")[0]):
+    return _jacobians(env, response)
+
+
+def _jacobians(env, response: str) -> np.ndarray:
   size = env.action_size
   obj_v = jnp.asarray(_object_dofs(env), jnp.int32)
 

@@ -10,8 +10,10 @@ configured as `discosyn experiment` configures them at --scale and --seed) one a
 other, each trained as soon as it has started. On a cold machine the start of the `gpu`
 scale takes minutes (docs/BENCHMARKS.md, "GPU"): give a call of 15 device-minutes one method.
   versions   python, jax, mujoco, mujoco-mjx, brax, the devices
-  start      per method: Trainer build, the physics prior's start where the method has one,
-             `init()`, and the compiles of the train step and of the evaluation
+  phase      per method, as each part of its start ends: Trainer build, the physics
+             prior's start where the method has one, `init()`, the compiles of the train
+             step and of the evaluation (none with --eval-every 0)
+  start      per method: those parts together
   physics    (--physics, after the first method's start) MJX env (control) steps/s of the
              jitted, vmapped `HandEnv.step` in a scan of --physics-steps steps, for every task
              of the set at every --batches, and for valve3 at one batch under each of
@@ -147,30 +149,43 @@ def configs(methods, task_set: str, scale: str, seed: int, backend: str) -> dict
   return {m: steps[m].config.replace(backend=backend).validate() for m in methods}
 
 
-def start_method(log: Log, method: str, config):
+def start_method(log: Log, method: str, config, evaluations: bool = True):
   """The Trainer, its fresh state (from the prior's start where the method has one) and the
-  compiled train step and evaluation, each part timed."""
-  trainer, build_s = timed(lambda: tasks.trainer(config))
-  decoder, prior_s = timed(lambda: loop.starting_decoder(trainer))
-  state, init_s = timed(lambda: trainer.init(decoder_params=decoder))
-  train_step, compile_s = timed(lambda: trainer.train_step.lower(state).compile())
-  key = jax.random.PRNGKey(0)
-  evaluate, eval_compile_s = timed(
-      lambda: trainer.evaluate.lower(state.params, state.normalizers, key).compile())
+  compiled train step and evaluation (None without `evaluations`), each part logged as it
+  ends: a call cut short still says where its time went."""
+  took = {}
+
+  def phase(name, fn):
+    out, took[name] = timed(fn)
+    log("phase", method=method, phase=name, seconds=took[name])
+    return out
+
+  trainer = phase("build", lambda: tasks.trainer(config))
+  decoder = phase("prior", lambda: loop.starting_decoder(trainer))
+  state = phase("init", lambda: trainer.init(decoder_params=decoder))
+  train_step = phase("train_compile", lambda: trainer.train_step.lower(state).compile())
+  evaluate = None
+  if evaluations:
+    key = jax.random.PRNGKey(0)
+    evaluate = phase("eval_compile", lambda: trainer.evaluate.lower(
+        state.params, state.normalizers, key).compile())
   log("start", method=method, backend=trainer.envs[0].backend, num_envs=config.num_envs,
       env_steps_per_train_step=config.env_steps_per_train_step, decoder_init=config.decoder_init,
-      build_s=build_s, prior_s=prior_s, init_s=init_s, train_compile_s=compile_s,
-      eval_compile_s=eval_compile_s,
-      start_s=build_s + prior_s + init_s + compile_s + eval_compile_s)
+      **{f"{name}_s": seconds for name, seconds in took.items()}, start_s=sum(took.values()))
   return config, state, train_step, evaluate
 
 
 def train_method(log: Log, method: str, config, state, train_step, evaluate, seconds: float,
                  eval_every: int, final_eval_s: float):
-  """Train for `seconds` (the last `final_eval_s` kept for the final evaluation)."""
+  """Train for `seconds` (the last `final_eval_s` kept for the final evaluation; without
+  `evaluate`, training success alone)."""
   train_start = time.perf_counter()
+  if evaluate is None:
+    eval_every, final_eval_s = 0, 0.0
 
   def run_eval(step):
+    if evaluate is None:
+      return
     key = jax.random.fold_in(jax.random.PRNGKey(config.seed + 1), step)
     results, took = timed(lambda: evaluate(state.params, state.normalizers, key))
     results = jax.tree.map(float, jax.device_get(results))
@@ -191,9 +206,9 @@ def train_method(log: Log, method: str, config, state, train_step, evaluate, sec
         wall_s=time.perf_counter() - train_start,
         env_steps_per_s=config.env_steps_per_train_step / took, finite=bool(metrics["finite"]),
         **{f"{n}/success": float(metrics[f"{n}/success"]) for n in config.tasks})
-    if step % eval_every == 0:
+    if eval_every and step % eval_every == 0:
       run_eval(step)
-  if step % eval_every:
+  if not eval_every or step % eval_every:
     run_eval(step)
 
 
@@ -218,7 +233,9 @@ def main(argv=None):
                       help="physics settings timed on valve3 beside the default (none: skip)")
   parser.add_argument("--physics-steps", type=int, default=20, help="control steps per timing")
   parser.add_argument("--threads", type=int, default=12, help="parallel compiles of the physics")
-  parser.add_argument("--eval-every", type=int, default=10, help="train steps between evaluations")
+  parser.add_argument("--eval-every", type=int, default=10,
+                      help="train steps between evaluations (0: none, and no eval compile: "
+                           "training success alone)")
   parser.add_argument("--budget-s", type=float, default=480.0,
                       help="seconds from the start after which the last method stops training")
   parser.add_argument("--final-eval-s", type=float, default=15.0,
@@ -235,7 +252,7 @@ def main(argv=None):
   log("versions", **versions())
 
   for i, (method, config) in enumerate(todo.items()):
-    started = start_method(log, method, config)
+    started = start_method(log, method, config, evaluations=args.eval_every > 0)
     if args.physics and i == 0:
       try:  # a failure here must not cost the training below its share of the call
         measure_physics(log, config.tasks, args.batches, args.settings, args.physics_steps,
