@@ -21,7 +21,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from discosyn_jax.env import hands
+from discosyn_jax.env import hand_env, hands
 from discosyn_jax.synergies import fitting
 
 DELTA = 0.5  # the push on each action, in its [-1, 1] range
@@ -53,8 +53,8 @@ POOLINGS = ("trace", "share")  # how the tasks' metrics make one basis (`pool`)
 
 
 def reference(env):
-  """`env` on MuJoCo C: itself where it is native already (or has no physics)."""
-  if getattr(env, "backend", "native") == "native" or not hasattr(env, "mj_model"):
+  """`env` on MuJoCo C: itself where it is native already (or is no hand env)."""
+  if not isinstance(env, hand_env.HandEnv) or env.backend == "native":
     return env
   return type(env)(env.task, backend="native", hand=env.hand)
 
