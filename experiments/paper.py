@@ -112,8 +112,10 @@ SCALES = {
     "cpu": Scale(dict(num_envs=64, unroll_length=20, num_minibatches=4, update_epochs=4,
                       steps=300, eval_every=50, eval_envs=32, checkpoint_every=100), 32, 3000,
                  (0, 1, 2), per_set={"set2": dict(steps=1200, checkpoint_every=200)}),
-    # one GPU: 2048 envs per task, 98 M env steps for a four-task run; episodes restart from
-    # a pool of initial states, so the train step compiles no mjx.forward (BENCHMARKS.md)
+    # one GPU: 2048 envs per task, 98 M env steps for a four-task run (~26 min on an H200 at
+    # its 64k env steps/s, ready in ~3.5 min, 2026-12-04; set #1's default trained to
+    # 0.95-1.00 by 18.8 M); episodes restart from a pool of initial states, so the train step
+    # compiles no mjx.forward (BENCHMARKS.md, "GPU")
     "gpu": Scale(dict(num_envs=2048, unroll_length=20, num_minibatches=16, update_epochs=4,
                       reset_pool=True, steps=600, eval_every=25, eval_envs=256, checkpoint_every=100), 256, 20000,
                  (0, 1, 2)),
