@@ -5,6 +5,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import optax
+import pytest
 
 from discosyn_jax.agent import networks
 from discosyn_jax.config import TrainConfig
@@ -76,3 +77,31 @@ def test_a_decoder_trained_towards_another_subspace_moves_there():
     assert float(drift["decoder/change"]) > 0.3
     assert float(drift["decoder/cos_min"]) < 0.9
     assert float(reached.min()) > float(start.min()) + 0.2
+
+
+def test_solving_actions_reads_where_a_policys_actions_lie(tmp_path):
+  """A decoder spanning the plane a policy's actions lie in holds all of their variance and
+  overlaps PCA-4 of them fully; one orthogonal to it holds none."""
+  from discosyn_jax.synergies import fitting
+  from experiments import solving_actions
+
+  rng = np.random.default_rng(0)
+  basis = np.linalg.qr(rng.normal(size=(20, 20)))[0]
+  plane, rest = basis[:, :4], basis[:, 4:8]
+  actions = {"a": rng.normal(size=(200, 4)) @ plane.T,
+             "b": rng.normal(size=(200, 4)) @ plane.T + 0.3 * plane[:, 0]}
+  fit = tmp_path / "synergies-setx-seed0"
+  fit.mkdir()
+  np.savez(fit / "actions.npz", **actions)
+  fields = dict(decoder="linear", n_synergies=4, decoder_bias=True, decoder_hidden=(128, 128))
+  for name, span in (("inside", plane @ rng.normal(size=(4, 4))), ("outside", rest)):
+    params = {"synergies": {"kernel": span.T.astype(np.float32),
+                            "bias": np.zeros(20, np.float32)},
+              "log_std": np.zeros(20, np.float32)}
+    (tmp_path / f"{name}-setx-seed0").mkdir()
+    fitting.save(tmp_path / f"{name}-setx-seed0" / "decoder.npz", params, fields)
+  rows = solving_actions.table(tmp_path, "setx", 4).splitlines()[2:]
+  assert rows == ["| 0 | inside-setx-seed0 | 1.00 (chance 0.20) | 1.00 | 1.00 |",
+                  "| 0 | outside-setx-seed0 | 0.00 (chance 0.20) | 0.00 | 0.00 |"]
+  with pytest.raises(ValueError, match="holds no synergies-set2"):
+    solving_actions.table(tmp_path, "set2", 4)
