@@ -54,9 +54,9 @@ def linear_spans(folder: pathlib.Path, task_set: str, seed: int) -> dict[str, np
 
 def table(folder: pathlib.Path, task_set: str, k: int) -> str:
   lines = []
-  for fit in sorted(folder.glob(f"synergies-{task_set}-seed*")):
-    seed = int(fit.name.rsplit("seed", 1)[1])
-    with np.load(fit / "actions.npz") as data:
+  for kept in sorted(folder.glob(f"synergies-{task_set}-seed*/actions.npz")):
+    seed = int(kept.parent.name.rsplit("seed", 1)[1])
+    with np.load(kept) as data:
       actions = {t: data[t] for t in data.files}
     pooled = np.concatenate(list(actions.values()))
     centred = pooled - pooled.mean(axis=0)
