@@ -68,7 +68,11 @@ def jacobians(env, response: str = "objects") -> np.ndarray:
     raise ValueError(f"the prior's response must be one of {', '.join(RESPONSES)}, not "
                      f"{response!r}")
   env = reference(env)
-  with jax.default_device(jax.devices("cpu")[0]):
+  try:
+    cpu = jax.devices("cpu")[0]
+  except RuntimeError:  # JAX_PLATFORMS without cpu: the callbacks still run on the host
+    cpu = None
+  with jax.default_device(cpu):
     return _jacobians(env, response)
 
 
