@@ -1,6 +1,9 @@
 """How much of a solving policy's actions each linear synergy space holds.
 
-  python experiments/solving_actions.py docs/results/paper --set set2
+  python experiments/solving_actions.py runs/paper --set set2
+
+FOLDER is the runs of `discosyn experiment`: `discosyn keep` leaves the fits' actions.npz
+(1 MB a seed) out of its records, so a kept folder has none.
 
 For each seed whose fit of full-action PPO's actions is in FOLDER
 (synergies-<set>-seed<n>/actions.npz: the trained policy's actions, per task) and each
@@ -24,14 +27,13 @@ import numpy as np
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from discosyn_jax.synergies import diagnostics, fitting  # noqa: E402
+from discosyn_jax.synergies import diagnostics, fitting, physics_prior  # noqa: E402
 
 
 def variance_share(actions: np.ndarray, span: np.ndarray) -> float:
   """The share of the actions' variance (about their mean) inside span(span's columns)."""
-  q, _ = np.linalg.qr(span)
   centred = actions - actions.mean(axis=0)
-  return float(np.sum((centred @ q) ** 2) / max(np.sum(centred ** 2), 1e-12))
+  return physics_prior.captured(span, centred.T @ centred)
 
 
 def linear_spans(folder: pathlib.Path, task_set: str, seed: int) -> dict[str, np.ndarray]:
@@ -58,9 +60,8 @@ def table(folder: pathlib.Path, task_set: str, k: int) -> str:
     seed = int(kept.parent.name.rsplit("seed", 1)[1])
     with np.load(kept) as data:
       actions = {t: data[t] for t in data.files}
-    pooled = np.concatenate(list(actions.values()))
-    centred = pooled - pooled.mean(axis=0)
-    top = np.linalg.svd(centred, full_matrices=False)[2][:k].T  # PCA-k of the policy's actions
+    # PCA-k of the policy's actions, as the PCA rows fit it
+    top = fitting.fit_pca(np.concatenate(list(actions.values())), k)[0]["synergies"]["kernel"].T
     if not lines:
       lines += [f"| seed | row | overlap with PCA{k} of PPO's actions | "
                 + " | ".join(actions) + " |", "|---" * (len(actions) + 3) + "|"]
