@@ -34,6 +34,7 @@ from discosyn_jax.run import layout, logs
 from experiments import record, report_figures
 from experiments.presets import REWARDED
 from experiments.report_runs import Run, find, order
+import tasks
 from tasks import TASK_SETS
 
 # The paper's Tables I and II (1 = solved, columns in these tasks' order) and its PCA
@@ -97,7 +98,8 @@ def solved_tables(runs: list[Run], threshold: float) -> str:
     task_names = list(in_set[0].config.tasks)
     paper = PAPER_SOLVED.get(task_set, {})
     lines += [f"### {task_set}: tasks solved (success >= {threshold:.0%})", "",
-              "| method | " + " | ".join(task_names) + " | mean | over the curve | solved |",
+              "| method | " + " | ".join(map(tasks.label, task_names))
+              + " | mean | over the curve | solved |",
               "|---" * (len(task_names) + 4) + "|"]
     for method in order({r.method for r in in_set}):
       group = [r for r in in_set if r.method == method]
@@ -327,7 +329,7 @@ def _write(runs, fits, paths, out: pathlib.Path, threshold: float, with_tsne: bo
     lines += ["## Training curves", ""]
   for task_set in sorted({r.task_set for r in main}):
     group = [r for r in main if r.task_set == task_set]
-    name = f"curves-{task_set}.png".replace("+", "_")
+    name = figure_name("curves", task_set)
     report_figures.curves(group, out / name, f"{task_set}: deterministic evaluation success")
     lines += [f"![{task_set}]({name})", ""]
 
@@ -352,7 +354,7 @@ def _write(runs, fits, paths, out: pathlib.Path, threshold: float, with_tsne: bo
               "or seeds]; the learned subspaces are read from the runs' checkpoints, or their "
               "records' decoder.npz.", "", discovered]
     for task_set in sorted({r.task_set for r in main}):
-      name = f"overlap-{task_set}.png".replace("+", "_")
+      name = figure_name("overlap", task_set)
       if report_figures.overlap_curves([r for r in main if r.task_set == task_set], out / name,
                         f"{task_set}: the decoder's subspace during training"):
         lines += [f"![overlap {task_set}]({name})", ""]
@@ -366,7 +368,7 @@ def _write(runs, fits, paths, out: pathlib.Path, threshold: float, with_tsne: bo
     best = max((r for r in drawable if r.task_set == task_set),
                key=lambda r: (np.mean([r.final.get(f"{t}/success", 0) for t in r.config.tasks]),
                               -r.seed))
-    name = f"tsne-{task_set}.png".replace("+", "_")
+    name = figure_name("tsne", task_set)
     report_figures.tsne(best, out / name, make_trainer=make_trainer)
     lines += [f"{best.method} (its best-scoring run on {task_set}, `{best.path.name}`):", "",
               f"![t-SNE {task_set}]({name})", ""]
@@ -400,3 +402,9 @@ def _write(runs, fits, paths, out: pathlib.Path, threshold: float, with_tsne: bo
 def _figures(report_text: str) -> list[str]:
   """The figure files a REPORT.md links, each beside it."""
   return re.findall(r"\]\(([^)/]+\.png)\)", report_text)
+
+
+def figure_name(kind: str, task_set: str) -> str:
+  """A figure's file name for a set ("set1 on leap16", "Press+Rake"): one a Markdown link
+  takes as it is (no spaces, no slashes)."""
+  return f"{kind}-{re.sub(r'[^A-Za-z0-9_.-]+', '_', task_set)}.png"

@@ -14,6 +14,7 @@ from discosyn_jax.env import hands
 from discosyn_jax.run import layout, logs
 from experiments import record
 from experiments.presets import DECAY, PRIORED, REWARDED
+import tasks
 from tasks import TASK_SETS
 
 _DECAYED = f"-wd{DECAY['decoder_weight_decay']:g}a{DECAY['decoder_weight_decay_steps']}"
@@ -90,7 +91,7 @@ def _set_of(config: TrainConfig) -> str:
   for name, members in TASK_SETS.items():
     if tuple(members) == tuple(config.tasks):
       return name
-  return "+".join(config.tasks)
+  return "+".join(tasks.label(task) for task in config.tasks)  # one's own task by its class
 
 
 def load_run(path: pathlib.Path) -> Run:

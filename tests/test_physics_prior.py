@@ -169,3 +169,39 @@ def test_sharing_gives_each_task_its_direction_where_the_pooled_sum_does_not():
   np.testing.assert_allclose(shared.T @ shared, np.eye(2), atol=1e-9)
   with pytest.raises(ValueError, match="pooling must be one of trace, share"):
     physics_prior.pool([m0], 1, "max")
+
+
+class PlantedGate:
+  """One step pays action 1 until action 1, held up for 5 steps, has opened a gate; past it,
+  the step pays twice action 0. A uniform random policy seldom opens the gate."""
+
+  action_size, episode_length = 2, 20
+
+  def __init__(self):
+    import jax.numpy as jnp
+    import mujoco
+    from brax.envs.base import State
+
+    self.mj_model = mujoco.MjModel.from_xml_string(_PLANTED)
+    self._jnp, self._state = jnp, State
+
+  def reset(self, key):
+    zero = self._jnp.zeros(())
+    return self._state(pipeline_state=self._jnp.zeros(4), obs=self._jnp.zeros(1), reward=zero,
+                       done=zero, metrics={})
+
+  def step(self, state, action):
+    opened = state.obs[0] + 0.1 * action[1]
+    reward = self._jnp.where(opened > 0.5, 2.0 * action[0], action[1])
+    return state.replace(obs=opened[None], reward=reward)
+
+
+def test_the_prior_read_at_a_policys_states_sees_what_only_that_policy_reaches(monkeypatch):
+  monkeypatch.setattr(physics_prior, "EVERY", 10)  # states at steps 0 and 10
+  env = PlantedGate()
+  import jax.numpy as jnp
+  opener = lambda obs, key: jnp.broadcast_to(jnp.array([0.0, 1.0]), (obs.shape[0], 2))
+  random_states = physics_prior.basis([env], 1, "reward")
+  policy_states = physics_prior.basis([env], 1, "reward", acts=[opener])
+  assert abs(random_states[1, 0]) == pytest.approx(1.0, abs=1e-5)  # before the gate: action 1
+  assert abs(policy_states[0, 0]) == pytest.approx(1.0, abs=1e-5)  # past it: action 0

@@ -1,7 +1,8 @@
 """Synergy priors from the physics: the action directions that matter most to the task set,
 the same for every seed (a tie-breaker; docs/TRAINING_NOTES.md has its runs).
 
-For each env: states of a uniform random policy (a fixed seed, never the run's); at each,
+For each env: states of a uniform random policy (a fixed seed, never the run's; another
+policy's where one is given, for diagnostics: docs/results/policy-states/); at each,
 every action pushed by +-DELTA for one control step, and the step's outcome differenced into
 a Jacobian J (outputs x actions). The outcome (`response`) is either the velocity of every
 object dof (the joints that are not the hand's) or the task's reward of the step. M_env =
@@ -59,11 +60,12 @@ def reference(env):
   return type(env)(env.task, backend="native", hand=env.hand)
 
 
-def jacobians(env, response: str = "objects") -> np.ndarray:
+def jacobians(env, response: str = "objects", act=None) -> np.ndarray:
   """(states, outputs, actions): how one control step's outcome answers each action pushed,
-  at states of a random policy, on MuJoCo C (`reference`). `response` "objects": the
+  at states of a policy, on MuJoCo C (`reference`). `response` "objects": the
   velocity of every object dof; "reward": the task's reward of the step, what the task asks
-  for (one output)."""
+  for (one output). `act(obs, key) -> actions` is the policy whose states are read (jittable,
+  batched); None: a uniform random one, the prior's."""
   if response not in RESPONSES:
     raise ValueError(f"the prior's response must be one of {', '.join(RESPONSES)}, not "
                      f"{response!r}")
@@ -73,17 +75,18 @@ def jacobians(env, response: str = "objects") -> np.ndarray:
   except RuntimeError:  # JAX_PLATFORMS without cpu: the callbacks still run on the host
     cpu = None
   with jax.default_device(cpu):
-    return _jacobians(env, response)
+    return _jacobians(env, response, act)
 
 
-def _jacobians(env, response: str) -> np.ndarray:
+def _jacobians(env, response: str, act) -> np.ndarray:
   size = env.action_size
   obj_v = jnp.asarray(_object_dofs(env), jnp.int32)
 
   @jax.jit
   def collect(key):
     def body(state, key):
-      action = jax.random.uniform(key, (ENVS, size), minval=-1, maxval=1)
+      action = (jax.random.uniform(key, (ENVS, size), minval=-1, maxval=1) if act is None
+                else jnp.clip(act(state.obs, key), -1, 1))
       return jax.vmap(env.step)(state, action), (state, action)
 
     start = jax.vmap(env.reset)(jax.random.split(key, ENVS))
@@ -111,10 +114,10 @@ def _jacobians(env, response: str) -> np.ndarray:
       states, actions))
 
 
-def metric(env, response: str = "objects") -> np.ndarray:
+def metric(env, response: str = "objects", act=None) -> np.ndarray:
   """(actions, actions): the task's response metric, the sum over states of J^T J, scaled to
-  trace 1 so that each task counts alike."""
-  jac = jacobians(env, response)
+  trace 1 so that each task counts alike (at the states of `act`, as `jacobians`)."""
+  jac = jacobians(env, response, act)
   value = np.einsum("soa,sob->ab", jac, jac)
   return value / max(np.trace(value), 1e-12)
 
@@ -148,9 +151,12 @@ def captured(directions: np.ndarray, metric_: np.ndarray) -> float:
   return float(np.trace(q.T @ metric_ @ q) / max(np.trace(metric_), 1e-12))
 
 
-def basis(envs, b: int, response: str = "objects", pooling: str = "trace") -> np.ndarray:
-  """(actions, b): the prior's directions for a task set (module docstring)."""
-  return pool([metric(env, response) for env in envs], b, pooling)
+def basis(envs, b: int, response: str = "objects", pooling: str = "trace",
+          acts=None) -> np.ndarray:
+  """(actions, b): the prior's directions for a task set (module docstring); read at the
+  states of `acts`, a policy per env (as `jacobians`), where given."""
+  acts = [None] * len(envs) if acts is None else acts
+  return pool([metric(env, response, a) for env, a in zip(envs, acts)], b, pooling)
 
 
 def start(random_decoder: dict, prior: np.ndarray) -> dict:

@@ -10,6 +10,7 @@ two tasks) with an evaluation every 5: at the `cpu` scale's 300 steps, evaluated
 both rows are at 0.94-1.00 from the first evaluation on, and the curve shows nothing.
 """
 
+import json
 import pathlib
 import sys
 
@@ -33,3 +34,8 @@ def config(method: str, seed: int):
 if __name__ == "__main__":
   method, seed, out = sys.argv[1], int(sys.argv[2]), pathlib.Path(sys.argv[3])
   loop.train(config(method, seed), out, make_trainer=tasks.trainer, progress=False)
+  # the row's name and set for `discosyn report` (its config alone names the control Random3-L)
+  row = {"default": "DiscoSyn3-L-reward", "zfree": "Random3-L-zfree"}[method]
+  (out / "experiment.json").write_text(json.dumps(
+      {"experiment": "discosyn-own-set", "method": row, "set": "Press+Rake", "seed": seed,
+       "scale": "cpu sizes, 100 train steps"}, indent=1) + "\n")
