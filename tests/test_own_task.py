@@ -102,7 +102,8 @@ def _hold(env, **actions):
 
 @pytest.mark.parametrize("cls, deliberate, success", [
     ("Press", dict(J2=0.4), 1.0),  # fingers bent at the knuckles: the button held down
-    ("Rake", dict(J2=1.0, J1=1.0), 0.1)])  # fingers curled back over the puck
+    ("Rake", dict(J2=1.0, J1=1.0), 0.1),  # fingers curled back over the puck
+    ("RakeFar", dict(J2=1.0, J1=1.0), 0.2)])  # the same, 9 cm: 0.25 (the neutral posture 0)
 def test_the_own_task_set_is_solved_by_a_deliberate_motion_not_by_chance(cls, deliberate, success):
   """The example task set (docs/examples/own_set/) is well posed: a deliberate motion
   succeeds where a uniform random policy rarely does (docs/YOUR_TASK.md has the figures)."""

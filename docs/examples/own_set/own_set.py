@@ -89,3 +89,16 @@ class Rake(_Slide):
 
   def success(self, view, info):
     return (self._raked(view) >= self.config.success_distance).astype(jnp.float32)
+
+
+@dataclasses.dataclass(frozen=True)
+class RakeFarConfig(RakeConfig):
+  success_distance: float = 0.09  # m: beyond what the neutral posture rakes (4.7 cm)
+
+
+class RakeFar(Rake):
+  """The rake, 9 cm: the neutral posture (every action 0) no longer does it (0 %); the four
+  fingers' J2 curled with every other action at 0 does (all of 8 episodes); a uniform random
+  policy 9-14 %."""
+  config_class = RakeFarConfig
+  summary = "rake a puck 9 cm along its rail towards the palm"

@@ -1,7 +1,10 @@
 """A task set of one's own (docs/examples/own_set/: press a button, rake a puck) from the
 default start, beside its strongest control, as a researcher would run them from Python.
 
-  python docs/results/own-set/run.py {default,zfree} SEED OUT_DIR
+  python docs/results/own-set/run.py {default,zfree} SEED OUT_DIR [TASK ...]
+
+TASK: classes of docs/examples/own_set/own_set.py (default: Press Rake; the harder set,
+whose neutral posture solves neither task: Press RakeFar).
 
 default: DiscoSyn3-L-reward (the linear DiscoSyn preset's start: the reward prior, z
 bounded); zfree: Random3-L-zfree (a frozen random decoder, z free: the strongest control on
@@ -22,8 +25,8 @@ HERE = pathlib.Path(__file__).resolve().parent
 FILE = HERE.parents[1] / "examples" / "own_set" / "own_set.py"
 
 
-def config(method: str, seed: int):
-  names = tuple(tasks.load(f"{FILE}:{name}") for name in ("Press", "Rake"))
+def config(method: str, seed: int, classes=("Press", "Rake")):
+  names = tuple(tasks.load(f"{FILE}:{name}") for name in classes)
   base = presets.preset("set1-disco3-linear").replace(tasks=names, seed=seed,
                                                       **{**paper.SCALES["cpu"].train, "steps": 100, "eval_every": 5})
   if method == "zfree":
@@ -33,9 +36,10 @@ def config(method: str, seed: int):
 
 if __name__ == "__main__":
   method, seed, out = sys.argv[1], int(sys.argv[2]), pathlib.Path(sys.argv[3])
-  loop.train(config(method, seed), out, make_trainer=tasks.trainer, progress=False)
+  classes = tuple(sys.argv[4:]) or ("Press", "Rake")
+  loop.train(config(method, seed, classes), out, make_trainer=tasks.trainer, progress=False)
   # the row's name and set for `discosyn report` (its config alone names the control Random3-L)
   row = {"default": "DiscoSyn3-L-reward", "zfree": "Random3-L-zfree"}[method]
   (out / "experiment.json").write_text(json.dumps(
-      {"experiment": "discosyn-own-set", "method": row, "set": "Press+Rake", "seed": seed,
+      {"experiment": "discosyn-own-set", "method": row, "set": "+".join(classes), "seed": seed,
        "scale": "cpu sizes, 100 train steps"}, indent=1) + "\n")
