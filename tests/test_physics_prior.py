@@ -171,24 +171,11 @@ def test_sharing_gives_each_task_its_direction_where_the_pooled_sum_does_not():
     physics_prior.pool([m0], 1, "max")
 
 
-class PlantedGate:
-  """One step pays action 1 until action 1, held up for 5 steps, has opened a gate; past it,
+class PlantedGate(PlantedResponse):
+  """One step pays action 1 until action 1, held up for 6 steps, has opened a gate; past it,
   the step pays twice action 0. A uniform random policy seldom opens the gate."""
 
-  action_size, episode_length = 2, 20
-
-  def __init__(self):
-    import jax.numpy as jnp
-    import mujoco
-    from brax.envs.base import State
-
-    self.mj_model = mujoco.MjModel.from_xml_string(_PLANTED)
-    self._jnp, self._state = jnp, State
-
-  def reset(self, key):
-    zero = self._jnp.zeros(())
-    return self._state(pipeline_state=self._jnp.zeros(4), obs=self._jnp.zeros(1), reward=zero,
-                       done=zero, metrics={})
+  episode_length = 20
 
   def step(self, state, action):
     opened = state.obs[0] + 0.1 * action[1]
