@@ -5,12 +5,9 @@ demo, tasks, render-scenes, upgrade; its flags, and how it ends (one line and ex
 from __future__ import annotations
 
 import argparse
-import gc
-import logging
 import os
 import signal
 import sys
-import threading
 
 from discosyn import commands
 
@@ -235,69 +232,23 @@ def add_bench_parser(sub) -> None:
   p.set_defaults(fn=bench.run)
 
 
-class Terminated(KeyboardInterrupt):
-  """SIGTERM (a scheduler ending the job): it stops a command as Ctrl-C does."""
-
-
-def _stopper(exception_type):
-  """A handler that stops the command at once; where the signal landed inside a
-  garbage-collector callback (which would print and drop the exception), at the training
-  loop's next step; a second signal while a stop is under way lets the first one end
-  (discosyn_jax/run/stop.py)."""
-  def handler(signum, frame):
-    from discosyn_jax.run import stop
-
-    _quiet_end()  # the command ends: from here on, one line (main sets both back)
-    if stop.under_way():
-      return
-    if stop.in_gc_callback(frame):
-      stop.defer(exception_type())
-      return
-    raise stop.raised(exception_type())
-
-  return handler
-
-
 def main(argv: list[str] | None = None) -> int:
   from discosyn_jax.run import stop  # light: no JAX
 
   args = build_parser().parse_args(argv)
-  # a handler only the main thread may set (a notebook may call main from another)
-  main_thread = threading.current_thread() is threading.main_thread()
-  previous = {sig: signal.signal(sig, _stopper(kind))
-              for sig, kind in ((signal.SIGTERM, Terminated), (signal.SIGINT, KeyboardInterrupt))
-              } if main_thread else {}
-  collecting, unraisable = gc.isenabled(), sys.unraisablehook
-  silenced = logging.root.manager.disable
-  try:
-    return _run(args)
-  except BaseException as err:
-    stopped = stop.taken(err)  # Ctrl-C or SIGTERM, wherever it landed: one line
-    if stopped is None:
-      raise
-    how, signum = ("SIGTERM", signal.SIGTERM) if isinstance(stopped, Terminated) else \
-        ("Ctrl-C", signal.SIGINT)
-    _quiet_end()
-    print(f"discosyn: stopped by {how}{': ' + str(stopped) if str(stopped) else ''}",
-          file=sys.stderr)
-    return 128 + signum
-  finally:
-    sys.unraisablehook = unraisable
-    logging.disable(silenced)
-    if collecting:
-      gc.enable()
-    for sig, handler in previous.items():  # (None: set outside Python, cannot be set back)
-      signal.signal(sig, signal.SIG_DFL if handler is None else handler)
-    stop.reset()
-
-
-def _quiet_end() -> None:
-  """A stopped command's line is its only one: objects the garbage collector frees while it
-  ends (orbax's event loops, their pipes closed) printed "Exception ignored" tracebacks, and
-  JAX logs the traceback of a host callback that a stop interrupted."""
-  gc.disable()
-  sys.unraisablehook = lambda unraisable: None
-  logging.disable(logging.CRITICAL)
+  with stop.handled():  # Ctrl-C and SIGTERM, wherever they land: one line
+    try:
+      return _run(args)
+    except BaseException as err:
+      stopped = stop.taken(err)
+      if stopped is None:
+        raise
+      how, signum = ("SIGTERM", signal.SIGTERM) if isinstance(stopped, stop.Terminated) else \
+          ("Ctrl-C", signal.SIGINT)
+      stop.quiet()
+      print(f"discosyn: stopped by {how}{': ' + str(stopped) if str(stopped) else ''}",
+            file=sys.stderr)
+      return 128 + signum
 
 
 def exit_with(code: int) -> None:
@@ -305,7 +256,9 @@ def exit_with(code: int) -> None:
   its files and said where it stopped; it ends at once, without the interpreter's shutdown,
   where orbax's idle writer threads printed "Event loop is closed" tracebacks after that line."""
   if code in (128 + signal.SIGINT, 128 + signal.SIGTERM):
-    _quiet_end()
+    from discosyn_jax.run import stop
+
+    stop.quiet()
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(code)

@@ -6,6 +6,9 @@
   python -u -m tests.fault_worker train ARGS...
       `discosyn ARGS` with the toy task (tests/toy_env.py) in place of every hand task and
       TOY in place of every preset; exits with the CLI's status
+  python -u -m tests.fault_worker library RUN_DIR
+      a script's own call of `training.loop.train` (no CLI) on the toy task, far longer than
+      any test waits; on a stop, prints the exception's class and message on stdout
 
 FAULT_STARVE_AFTER=N (both modes): after the N-th checkpoint this process writes, the disk
 is full: a file fills the small tmpfs the run is on (FAULT_FILL names it), or else, where no
@@ -162,6 +165,21 @@ def saves(run_dir: pathlib.Path) -> None:
     step += 1
 
 
+def library(run_dir: pathlib.Path) -> int:
+  import dataclasses
+
+  import tasks
+  from discosyn_jax.training import loop
+
+  config = dataclasses.replace(TOY, steps=100000, eval_every=0)
+  try:
+    loop.train(config, run_dir, make_trainer=tasks.trainer, progress=False, log=lambda _: None)
+  except KeyboardInterrupt as err:
+    print(f"{type(err).__name__}: {err}", flush=True)
+    return 1
+  return 0
+
+
 def main() -> int:
   starve_after_saves()
   mode, *args = sys.argv[1:]
@@ -176,6 +194,8 @@ def main() -> int:
   from experiments import presets
 
   tasks.registry.make_envs = toy_envs
+  if mode == "library":
+    return library(pathlib.Path(args[0]))
   if os.environ.get("FAULT_PHYSICS") or os.environ.get("FAULT_STOP_IN_PHYSICS"):
     tasks.registry.make_envs = physics_envs
   if os.environ.get("FAULT_STOP_IN_PHYSICS"):

@@ -527,6 +527,25 @@ def test_ctrl_c_and_sigterm_end_a_run_in_one_line_that_says_where_it_resumes(tmp
   assert not (run_dir / layout.LOCK).exists()
 
 
+@pytest.mark.parametrize("signum, name", [(signal.SIGINT, "KeyboardInterrupt"),
+                                          (signal.SIGTERM, "Terminated")])
+def test_a_script_calling_the_training_loop_is_stopped_as_cleanly_as_the_command(tmp_path, signum,
+                                                                                 name):
+  """No CLI: a script's own loop.train. SIGTERM (which would otherwise kill it on the spot,
+  lock and all) and Ctrl-C raise their stop, which names where the run resumes."""
+  run_dir = tmp_path / "run"
+  proc = worker("library", run_dir)
+  _wait_for(lambda: max(_periodic_steps(run_dir), default=0) >= 4, proc)
+  proc.send_signal(signum)
+  out, err = proc.communicate(timeout=60)
+  assert proc.returncode == 1, err
+  line = out.strip().splitlines()[-1]
+  assert line.startswith(f"{name}: training stopped at step "), line
+  resume_from = pathlib.Path(line.split("; it resumes from ")[1].split(": ")[0])
+  assert resume_from.parent.parent == run_dir and checkpoints.verify(resume_from) >= 4
+  assert not (run_dir / layout.LOCK).exists()
+
+
 def test_ctrl_c_before_the_first_checkpoint_of_a_new_run_leaves_nothing(tmp_path):
   run_dir = tmp_path / "deep" / "run"
   proc = _long_run(run_dir, "--checkpoint-every", "100000")

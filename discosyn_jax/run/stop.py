@@ -1,8 +1,10 @@
 """Stops (Ctrl-C, SIGTERM) wherever they land.
 
-The command's signal handlers (discosyn/cli.py) raise the stop at once where Python can take
-it: between steps, in an evaluation, after a compile or a save (saves hold signals until they
-end). Two places cannot take it, and this module covers them:
+Inside `handled()` (the `discosyn` command's whole run; `training.loop.train` when a script
+or a notebook calls it) Ctrl-C raises KeyboardInterrupt and SIGTERM `Terminated`, at once
+where Python can take them: between steps, in an evaluation, after a compile or a save
+(saves hold signals until they end). Two places cannot take them, and this module covers
+them:
 
 - a garbage-collector callback (JAX registers one): Python prints an exception raised there
   and drops it. The stop is parked (`defer`) and the training loop raises it at its next
@@ -18,10 +20,20 @@ A second signal while a stop is under way is ignored (`under_way`): the first on
 
 from __future__ import annotations
 
+import contextlib
 import gc
+import logging
+import signal
+import sys
+import threading
 
 _pending: list[BaseException] = []  # parked stops, not raised yet
 _raised: list[BaseException] = []  # the stop under way
+_open: list[bool] = []  # a handled() block is open: an inner one leaves its handlers alone
+
+
+class Terminated(KeyboardInterrupt):
+  """SIGTERM (a scheduler ending the job): it stops a run as Ctrl-C does."""
 
 
 def in_gc_callback(frame) -> bool:
@@ -66,3 +78,55 @@ def reset() -> None:
   """Forget every stop: a caller (a notebook, a test) goes on in the same process."""
   _pending.clear()
   _raised.clear()
+
+
+def quiet() -> None:
+  """From here on, the stop's own line alone: objects the garbage collector frees while a
+  stopped run ends (orbax's event loops, their pipes closed) printed "Exception ignored"
+  tracebacks, and JAX logs the traceback of a host callback that a stop interrupted."""
+  gc.disable()
+  sys.unraisablehook = lambda unraisable: None
+  logging.disable(logging.CRITICAL)
+
+
+def stopper(exception_type):
+  """A signal handler that raises the stop at once; where the signal landed inside a
+  garbage-collector callback (which would print and drop the exception), at the training
+  loop's next step; a second signal while a stop is under way lets the first one end."""
+  def handler(signum, frame):
+    quiet()  # the run ends: from here on, one line (handled() sets it back)
+    if under_way():
+      return
+    if in_gc_callback(frame):
+      defer(exception_type())
+      return
+    raise raised(exception_type())
+
+  return handler
+
+
+@contextlib.contextmanager
+def handled():
+  """Ctrl-C and SIGTERM stop what runs inside the block, cleanly (the stoppers above); on
+  leaving it, the signal handlers, the garbage collector and the logging are as they were
+  and the stops are forgotten. Only the main thread may set handlers (a notebook may run
+  elsewhere): there, and inside a block already open, this leaves everything as it is."""
+  if _open or threading.current_thread() is not threading.main_thread():
+    yield
+    return
+  previous = {sig: signal.signal(sig, stopper(kind))
+              for sig, kind in ((signal.SIGTERM, Terminated), (signal.SIGINT, KeyboardInterrupt))}
+  collecting, unraisable = gc.isenabled(), sys.unraisablehook
+  silenced = logging.root.manager.disable
+  _open.append(True)
+  try:
+    yield
+  finally:
+    _open.clear()
+    sys.unraisablehook = unraisable
+    logging.disable(silenced)
+    if collecting:
+      gc.enable()
+    for sig, handler in previous.items():  # (None: set outside Python, cannot be set back)
+      signal.signal(sig, signal.SIG_DFL if handler is None else handler)
+    reset()

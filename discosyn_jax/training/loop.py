@@ -120,8 +120,9 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *,
   process's alone to its end (owner.Writer). Continuing a run restores its newest good
   checkpoint and cuts its logs back to that step. A new run that ends before its first
   checkpoint leaves no trace (a run it replaces is back). A write that fails mid-run (a full
-  disk) stops it with WriteFailed, Ctrl-C (or SIGTERM) with KeyboardInterrupt, both
-  naming the last good checkpoint.
+  disk) stops it with WriteFailed, Ctrl-C with KeyboardInterrupt and SIGTERM with
+  stop.Terminated (a KeyboardInterrupt), each naming the last good checkpoint, whoever
+  calls this (run/stop.py: handled).
   """
   run_dir = pathlib.Path(run_dir)
   owner.refuse_if_written(run_dir)
@@ -130,7 +131,8 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *,
   checks.memory(config, trainer.envs)
   if config.decoder_init in config_lib.PRIORS:
     physics_prior.check(trainer.envs)
-  with owner.Writer(run_dir) as writer:
+  # Ctrl-C and SIGTERM stop it cleanly, from a script or a notebook as from the command
+  with stop.handled(), owner.Writer(run_dir) as writer:
     # again, now that it is ours: another process may have made or replaced a run there
     config = reading.run_config(run_dir, config, resume, force)
     if not resume:
