@@ -43,6 +43,7 @@ def build_parser() -> argparse.ArgumentParser:
 
   docs = config_lib.field_docs()  # each field's help, written once beside the field
   choices = {"decoder": config_lib.DECODERS, "decoder_init": config_lib.DECODER_INITS,
+             "discriminator_target": config_lib.DISCRIMINATOR_TARGETS,
              "backend": config_lib.BACKENDS,
              "physics": config_lib.PHYSICS}
 

@@ -23,6 +23,9 @@ DECODERS = ("linear", "mlp", "identity")
 # by, and how the tasks' metrics make one subspace (discosyn_jax/synergies/physics_prior.py)
 PRIORS = {"physics": ("objects", "trace"), "reward": ("reward", "share")}
 DECODER_INITS = ("random", *PRIORS)
+# what q(.|a) reads back from an action: the head's z (the paper's), or the activation the
+# decoder read, tanh(z) where z is bounded (the same as z where it is not)
+DISCRIMINATOR_TARGETS = ("z", "activation")
 BACKENDS = ("auto", "native", "mjx")  # auto: native on a CPU, mjx on an accelerator
 CONTROL_DT = 0.04  # s: one control step of every task
 # The physics of the tasks (tasks/registry.py, physics_overrides): "reference" is 10 MuJoCo
@@ -41,7 +44,7 @@ MAX_STEPS = 2**31 - 1  # the state counts train steps in an int32
 # `discosyn upgrade RUN` writes these values into it (upgrade below).
 ADDED = {"squash_z": False, "physics": "reference", "reset_pool": False, "decoder_weight_decay": 0.0,
          "decoder_weight_decay_steps": 0, "hand": "shadow20",
-         "decoder_init": "random"}
+         "decoder_init": "random", "discriminator_target": "z"}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -72,6 +75,10 @@ class TrainConfig:
   # the decoder reads tanh(z): synergy activations bounded to [-1, 1], so that the heads
   # cannot make up for any decoder by driving z far out (a hypothesis, docs/TRAINING_NOTES.md)
   squash_z: bool = False
+  # what the discriminator q(.|a) reads back from the action: z, the head's sample (the
+  # paper's), or activation, what the decoder read (tanh z where z is bounded: a z deep in
+  # tanh's saturation cannot be read back, and its bonus pays the heads for narrowing z)
+  discriminator_target: str = "z"
   # AdamW weight decay of the decoder's weights, a tie-breaker between adequate synergy
   # spaces: among the decoders that serve the tasks equally well, the smallest
   # (0: the paper's update)
@@ -149,6 +156,9 @@ class TrainConfig:
                          "noise: set alpha2 = alpha3 = 0")
     elif not 1 <= self.n_synergies <= 20:
       raise ValueError(f"the synergy count must be between 1 and 20, not {self.n_synergies}")
+    if self.discriminator_target not in DISCRIMINATOR_TARGETS:
+      raise ValueError(f"unknown discriminator_target {self.discriminator_target!r}; known: "
+                       f"{', '.join(DISCRIMINATOR_TARGETS)}")
     if self.decoder_init not in DECODER_INITS:
       raise ValueError(f"unknown decoder_init {self.decoder_init!r}; known: {', '.join(DECODER_INITS)}")
     if self.decoder_init in PRIORS and (self.decoder != "linear" or self.decoder_from):

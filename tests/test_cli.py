@@ -113,6 +113,8 @@ def test_the_strongest_control_is_two_flags_away():
 @pytest.mark.parametrize("argv, line", [
     (["train", "--decoder-init", "bogus"], "discosyn train: error: argument --decoder-init: "
      "invalid choice: 'bogus' (choose from 'random', 'physics', 'reward')"),
+    (["train", "--discriminator-target", "a"], "discosyn train: error: argument "
+     "--discriminator-target: invalid choice: 'a' (choose from 'z', 'activation')"),
     (["train", "--steps", "x"], "discosyn train: error: argument --steps: invalid int value: 'x'"),
     (["train", "--squash-z", "False"], "discosyn train: error: argument --squash-z: yes or no, "
      "not 'False'"),

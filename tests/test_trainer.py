@@ -147,6 +147,41 @@ def test_a_given_decoder_is_installed_and_a_misfit_refused():
     trainer.init(decoder_params=wrong)
 
 
+def _fitted_log_q(target: str, spread: float) -> float:
+  """The mean log q of a discriminator fitted (300 Adam steps) to bounded synergies: z of
+  std `spread`, decoded as a = tanh(z) W + noise."""
+  model = networks.build(TrainConfig(n_synergies=3, squash_z=True, discriminator_target=target),
+                         obs_sizes=(3,), action_size=20)
+  params = model.init(jax.random.PRNGKey(0), [jnp.zeros((1, 3))])
+  k1, k2, k3 = jax.random.split(jax.random.PRNGKey(1), 3)
+  z = spread * jax.random.normal(k1, (512, 3))
+  a = jnp.tanh(z) @ jax.random.normal(k2, (3, 20)) + 0.3 * jax.random.normal(k3, (512, 20))
+
+  def nll(p):
+    return -ppo.discriminator_log_prob(model, p, z, a).mean()
+
+  opt = optax.adam(3e-3)
+
+  @jax.jit
+  def step(params, opt_state):
+    updates, opt_state = opt.update(jax.grad(nll)(params), opt_state)
+    return optax.apply_updates(params, updates), opt_state
+
+  opt_state = opt.init(params)
+  for _ in range(300):
+    params, opt_state = step(params, opt_state)
+  return float(-nll(params))
+
+
+def test_the_discriminator_reads_back_the_activation_where_z_saturates():
+  """z deep in tanh's saturation (std 3) cannot be read back from the action: q of z falls
+  (its bonus would pay a head for narrowing z); q of the activation the decoder read does not."""
+  z_near, z_far = _fitted_log_q("z", 1.0), _fitted_log_q("z", 3.0)
+  act_near, act_far = _fitted_log_q("activation", 1.0), _fitted_log_q("activation", 3.0)
+  assert z_near - z_far > 2.0, (z_near, z_far)
+  assert abs(act_near - act_far) < 0.5 and act_far > z_far + 2.0, (act_near, act_far)
+
+
 def test_discriminator_likelihood_rises_on_a_fixed_batch():
   model = networks.build(TrainConfig(n_synergies=3), obs_sizes=(3,), action_size=20)
   params = model.init(jax.random.PRNGKey(0), [jnp.zeros((1, 3))])
@@ -202,6 +237,8 @@ def test_config_rejects_impossible_settings():
     TrainConfig(n_synergies=21).validate()
   with pytest.raises(ValueError, match="unknown decoder"):
     TrainConfig(decoder="cubic").validate()
+  with pytest.raises(ValueError, match="unknown discriminator_target 'u'; known: z, activation"):
+    TrainConfig(discriminator_target="u").validate()
   with pytest.raises(ValueError, match="minibatches"):
     TrainConfig(num_envs=3, unroll_length=5, num_minibatches=4).validate()
   with pytest.raises(ValueError, match="alpha2"):

@@ -90,6 +90,7 @@ class DiscoSyn(nn.Module):
   decoder_bias: bool = True
   decoder_noise: bool = True
   squash_z: bool = False
+  discriminator_target: str = "z"  # config.DISCRIMINATOR_TARGETS
   policy_hidden: tuple[int, ...] = (128, 128)
   value_hidden: tuple[int, ...] = (128, 128)
   decoder_hidden: tuple[int, ...] = (128, 128)
@@ -128,8 +129,16 @@ class DiscoSyn(nn.Module):
     `decoder_noise` off)."""
     if self.decoder == "identity":
       return z, None
-    mean, log_std = self.synergy_decoder(jnp.tanh(z) if self.squash_z else z)
+    mean, log_std = self.synergy_decoder(self.activation(z))
     return mean, log_std if self.decoder_noise else None
+
+  def activation(self, z):
+    """What the decoder reads of z: tanh(z) where z is bounded."""
+    return jnp.tanh(z) if self.squash_z else z
+
+  def discriminated(self, z):
+    """What q(.|a) reads back from the action z was decoded into."""
+    return self.activation(z) if self.discriminator_target == "activation" else z
 
   def discriminate(self, a):
     """(mean, log_std) of q(z | a)."""
@@ -153,7 +162,7 @@ def build(config, obs_sizes: Sequence[int], action_size: int) -> DiscoSyn:
   return DiscoSyn(
       obs_sizes=tuple(int(s) for s in obs_sizes), n_synergies=b, action_size=action_size,
       decoder=config.decoder, decoder_bias=config.decoder_bias, decoder_noise=config.decoder_noise,
-      squash_z=config.squash_z,
+      squash_z=config.squash_z, discriminator_target=config.discriminator_target,
       policy_hidden=tuple(config.policy_hidden), value_hidden=tuple(config.value_hidden),
       decoder_hidden=tuple(config.decoder_hidden),
       discriminator_hidden=tuple(config.discriminator_hidden),

@@ -44,9 +44,9 @@ class Samples:
 
 
 def discriminator_log_prob(model: DiscoSyn, params, z, action):
-  """log q(z | a)."""
+  """log q(z | a): of z, or of the activation the decoder read (model.discriminated)."""
   mean, log_std = model.apply(params, action, method=DiscoSyn.discriminate)
-  return gaussian_log_prob(z, mean, log_std)
+  return gaussian_log_prob(model.apply(params, z, method=DiscoSyn.discriminated), mean, log_std)
 
 
 def task_loss(model: DiscoSyn, params, task: int, s: Samples, config: TrainConfig):
