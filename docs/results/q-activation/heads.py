@@ -17,24 +17,28 @@ import sys
 
 import numpy as np
 
+from discosyn_jax.run import layout, logs
+
+THINNED = "heads.jsonl.xz"
 COLUMNS = ("entropy_z", "log_q", "bonus", "reward", "success")
 STEPS = (100, 300, 600, 900, 1200)
 
 
 def rows(run: pathlib.Path) -> list[dict]:
-  for name in ("metrics.jsonl", "heads.jsonl.xz", "metrics.jsonl.xz"):
-    path = run / name
-    if path.is_file():
-      with (lzma.open(path, "rt") if name.endswith(".xz") else open(path)) as f:
-        return [json.loads(line) for line in f if line.strip()]
-  raise SystemExit(f"{run}: no metrics.jsonl(.xz) or heads.jsonl.xz")
+  """The run's metrics log (or its archive), else the thinned one --thin kept."""
+  got = logs.read_log(run / layout.METRICS_FILE)
+  if not got and (run / THINNED).is_file():
+    got = logs.read_jsonl(run / THINNED)
+  if not got:
+    raise SystemExit(f"{run}: no {layout.METRICS_FILE}(.xz) or {THINNED}")
+  return got
 
 
 def thin(run: pathlib.Path, dest: pathlib.Path) -> None:
   kept = [{k: round(v, 4) if isinstance(v, float) else v for k, v in row.items()
            if k == "step" or k.split("/")[-1] in COLUMNS} for row in rows(run)]
   dest.mkdir(parents=True, exist_ok=True)
-  with lzma.open(dest / "heads.jsonl.xz", "wt") as f:
+  with lzma.open(dest / THINNED, "wt") as f:
     f.writelines(json.dumps(row) + "\n" for row in kept)
 
 
