@@ -104,7 +104,7 @@ TRAIN_FLAGS = {
     "decoder_weight_decay": "decoder_weight_decay",
     "decoder_weight_decay_steps": "decoder_weight_decay_steps",
     "decoder_init": "decoder_init", "freeze_decoder": "freeze_decoder", "squash_z": "squash_z",
-    "discriminator_target": "discriminator_target",
+    "discriminator_target": "discriminator_target", "task_posture": "task_posture",
 }
 
 

@@ -44,7 +44,7 @@ MAX_STEPS = 2**31 - 1  # the state counts train steps in an int32
 # `discosyn upgrade RUN` writes these values into it (upgrade below).
 ADDED = {"squash_z": False, "physics": "reference", "reset_pool": False, "decoder_weight_decay": 0.0,
          "decoder_weight_decay_steps": 0, "hand": "shadow20",
-         "decoder_init": "random", "discriminator_target": "z"}
+         "decoder_init": "random", "discriminator_target": "z", "task_posture": False}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -79,6 +79,11 @@ class TrainConfig:
   # paper's), or activation, what the decoder read (tanh z where z is bounded: a z deep in
   # tanh's saturation cannot be read back, and its bonus pays the heads for narrowing z)
   discriminator_target: str = "z"
+  # a learned posture per task added to the decoder's mean, a = W z + c + c_n: the shared
+  # synergies then span each task's motions around its own posture rather than the
+  # differences between the tasks' postures; the postures are the tasks' own, so they learn
+  # beside a frozen decoder too (not for the identity decoder, whose heads choose every action)
+  task_posture: bool = False
   # AdamW weight decay of the decoder's weights, a tie-breaker between adequate synergy
   # spaces: among the decoders that serve the tasks equally well, the smallest
   # (0: the paper's update)
@@ -156,6 +161,9 @@ class TrainConfig:
                          "noise: set alpha2 = alpha3 = 0")
     elif not 1 <= self.n_synergies <= 20:
       raise ValueError(f"the synergy count must be between 1 and 20, not {self.n_synergies}")
+    if self.task_posture and self.decoder == "identity":
+      raise ValueError("the identity decoder (full-action PPO) has no room for a task posture: "
+                       "its heads choose every action; set task_posture = false")
     if self.discriminator_target not in DISCRIMINATOR_TARGETS:
       raise ValueError(f"unknown discriminator_target {self.discriminator_target!r}; known: "
                        f"{', '.join(DISCRIMINATOR_TARGETS)}")

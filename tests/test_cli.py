@@ -110,6 +110,15 @@ def test_the_strongest_control_is_two_flags_away():
   assert (commands.train_config(args).freeze_decoder, commands.train_config(args).squash_z) == (False, True)
 
 
+def test_a_task_posture_without_a_decoder_is_one_line_and_nothing_made(tmp_path, capsys):
+  out = tmp_path / "run"
+  assert cli.main(["train", "--preset", "set1-ppo", "--task-posture", "yes", "--out", str(out)]) == 2
+  (err,) = capsys.readouterr().err.splitlines()
+  assert err.startswith("discosyn: error: the identity decoder (full-action PPO) has no room "
+                        "for a task posture"), err
+  assert not out.exists()
+
+
 @pytest.mark.parametrize("argv, line", [
     (["train", "--decoder-init", "bogus"], "discosyn train: error: argument --decoder-init: "
      "invalid choice: 'bogus' (choose from 'random', 'physics', 'reward')"),

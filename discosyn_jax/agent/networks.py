@@ -91,6 +91,7 @@ class DiscoSyn(nn.Module):
   decoder_noise: bool = True
   squash_z: bool = False
   discriminator_target: str = "z"  # config.DISCRIMINATOR_TARGETS
+  task_posture: bool = False  # a learned posture per task, added to the decoder's mean
   policy_hidden: tuple[int, ...] = (128, 128)
   value_hidden: tuple[int, ...] = (128, 128)
   decoder_hidden: tuple[int, ...] = (128, 128)
@@ -112,6 +113,11 @@ class DiscoSyn(nn.Module):
       raise ValueError(f"unknown decoder {self.decoder!r}")
     if self.has_discriminator:
       self.discriminator = GaussianHead(self.discriminator_hidden, b, 1.0, out_scale=1.0)
+    if self.task_posture:
+      # each task's own resting posture: the shared synergies span the motions around it,
+      # not the differences between the tasks' postures
+      self.postures = self.param("postures", nn.initializers.zeros,
+                                 (len(self.obs_sizes), self.action_size))
 
   @property
   def has_discriminator(self) -> bool:
@@ -132,6 +138,11 @@ class DiscoSyn(nn.Module):
     mean, log_std = self.synergy_decoder(self.activation(z))
     return mean, log_std if self.decoder_noise else None
 
+  def act(self, task: int, z):
+    """(mean, log_std) of task's action given z: the decoder's, moved by the task's posture."""
+    mean, log_std = self.decode(z)
+    return (mean + self.postures[task] if self.task_posture else mean), log_std
+
   def activation(self, z):
     """What the decoder reads of z: tanh(z) where z is bounded."""
     return jnp.tanh(z) if self.squash_z else z
@@ -149,7 +160,7 @@ class DiscoSyn(nn.Module):
     out = []
     for n, obs in enumerate(observations):
       z, _ = self.policy(n, obs)
-      a, _ = self.decode(z)
+      a, _ = self.act(n, z)
       out.append((z, self.value(n, obs), a))
       if self.has_discriminator:
         self.discriminate(a)
@@ -163,6 +174,7 @@ def build(config, obs_sizes: Sequence[int], action_size: int) -> DiscoSyn:
       obs_sizes=tuple(int(s) for s in obs_sizes), n_synergies=b, action_size=action_size,
       decoder=config.decoder, decoder_bias=config.decoder_bias, decoder_noise=config.decoder_noise,
       squash_z=config.squash_z, discriminator_target=config.discriminator_target,
+      task_posture=config.task_posture,
       policy_hidden=tuple(config.policy_hidden), value_hidden=tuple(config.value_hidden),
       decoder_hidden=tuple(config.decoder_hidden),
       discriminator_hidden=tuple(config.discriminator_hidden),
@@ -172,7 +184,7 @@ def build(config, obs_sizes: Sequence[int], action_size: int) -> DiscoSyn:
 # Top-level parameter collections by role: the optimiser labels them (ppo.optimizer), the
 # gradient norms are logged per role (train.py).
 def role(name: str) -> str:
-  if name.startswith("heads_"):
+  if name.startswith("heads_") or name == "postures":  # a posture is its task's
     return "heads"
   if name.startswith("values_"):
     return "values"

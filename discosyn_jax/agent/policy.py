@@ -1,4 +1,5 @@
-"""The policy's one chain, written once: obs -> head n -> z -> decoder -> a, with
+"""The policy's one chain, written once: obs -> head n -> z -> decoder (+ task n's posture,
+where there is one) -> a, with
 log pi(z, a | s, n) = log pi(z | s, n) + log p(a | z) (a decoder without noise, the
 sequential baselines' fixed spaces, adds no log p(a | z)). Acting (train.py, evaluation.py)
 and the PPO loss (ppo.py) both go through it."""
@@ -24,7 +25,7 @@ def sample(model: DiscoSyn, params, task: int, obs, draws):
   z_noise, a_noise = draws
   z_mean, z_log_std = model.apply(params, task, obs, method=DiscoSyn.policy)
   z = z_mean + jnp.exp(z_log_std) * z_noise
-  a_mean, a_log_std = model.apply(params, z, method=DiscoSyn.decode)
+  a_mean, a_log_std = model.apply(params, task, z, method=DiscoSyn.act)
   a = a_mean if a_log_std is None else a_mean + jnp.exp(a_log_std) * a_noise
   return z, a, _log_prob(z, z_mean, z_log_std, a, a_mean, a_log_std)
 
@@ -32,13 +33,13 @@ def sample(model: DiscoSyn, params, task: int, obs, draws):
 def deterministic(model: DiscoSyn, params, task: int, obs):
   """(z, a): the head's mean and the decoder's mean of it."""
   z_mean, _ = model.apply(params, task, obs, method=DiscoSyn.policy)
-  return z_mean, model.apply(params, z_mean, method=DiscoSyn.decode)[0]
+  return z_mean, model.apply(params, task, z_mean, method=DiscoSyn.act)[0]
 
 
 def log_prob(model: DiscoSyn, params, task: int, obs, z, action):
   """log pi(z, a | s) of given samples, and the two log stds (for the entropies)."""
   z_mean, z_log_std = model.apply(params, task, obs, method=DiscoSyn.policy)
-  a_mean, a_log_std = model.apply(params, z, method=DiscoSyn.decode)
+  a_mean, a_log_std = model.apply(params, task, z, method=DiscoSyn.act)
   return _log_prob(z, z_mean, z_log_std, action, a_mean, a_log_std), z_log_std, a_log_std
 
 
