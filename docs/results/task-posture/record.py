@@ -19,6 +19,7 @@ import numpy as np
 
 import tasks
 from discosyn_jax.run import layout
+from discosyn_jax.synergies import diagnostics, physics_prior
 from discosyn_jax.training import loop
 from experiments import record
 
@@ -35,9 +36,8 @@ if __name__ == "__main__":
   postures = np.asarray(params["postures"])
   np.savez(dest / "postures.npz", **dict(zip(trainer.config.tasks, postures)))
   subprocess.run([sys.executable, str(HEADS), "--thin", str(run), str(dest)], check=True)
-  w = np.asarray(params["synergy_decoder"]["synergies"]["kernel"])  # (b, actions)
-  basis, _ = np.linalg.qr(w.T)
+  basis = np.asarray(diagnostics.synergy_basis(trainer.model, state.params))
   for task, c in zip(trainer.config.tasks, postures):
-    inside = np.linalg.norm(basis.T @ c) ** 2 / max(np.linalg.norm(c) ** 2, 1e-12)
+    inside = physics_prior.captured(basis, np.outer(c, c))  # c's share inside span(W)
     print(f"{task:12s} |c_n| {np.linalg.norm(c):.3f}  max |c_n,i| {np.abs(c).max():.3f}  "
           f"share in span(W) {inside:.2f}")
