@@ -239,7 +239,9 @@ def main(argv: list[str] | None = None) -> int:
   args = build_parser().parse_args(argv)
   with stop.handled():  # Ctrl-C and SIGTERM, wherever they land: one line
     try:
-      return _run(args)
+      code = _run(args)
+      stop.check()  # a stop that Python dropped where it landed (a finalizer) ends it too
+      return code
     except BaseException as err:
       stopped = stop.taken(err)
       if stopped is None:

@@ -22,6 +22,9 @@ main thread after the first checkpoint the process sends itself SIG and waits in
 callback, so the signal lands there; SIG2, if named, is sent again while the stopped run puts its folder
 right (pressed twice). Stdout says where each signal was sent, and whether the waiting
 callback ran to its end (a stop not taken where it landed).
+FAULT_STOP_IN_FINALIZER=1 (train): after the first checkpoint, an object's finalizer
+(`__del__`, run on the main thread between two train steps) sends this process SIGINT and
+waits, so the signal lands there, where Python drops any exception raised.
 """
 
 import os
@@ -119,6 +122,18 @@ def _send_and_wait(signum: int, where: str) -> None:
   print(f"the wait {where} ran to its end", flush=True)
 
 
+def count_saves() -> list:
+  """The list to which every checkpoint this process saves from here on is appended."""
+  saved, save = [], checkpoints.save
+
+  def counted_save(*args, **kwargs):
+    saved.append(save(*args, **kwargs))
+    return saved[-1]
+
+  checkpoints.save = counted_save
+  return saved
+
+
 def stop_in_physics(signals: str) -> None:
   """FAULT_STOP_IN_PHYSICS: see the module's docstring."""
   import mujoco.batch
@@ -128,12 +143,8 @@ def stop_in_physics(signals: str) -> None:
   # is sent from a physics call on the main thread, which this makes the rule
   jax.config.update("jax_cpu_enable_async_dispatch", False)
   first, *again = [getattr(signal, name) for name in signals.split(",")]
-  saved, sent = [], []
-  save, rollout, latest = checkpoints.save, mujoco.batch.Batch.rollout, checkpoints.latest
-
-  def counted_save(*args, **kwargs):
-    saved.append(save(*args, **kwargs))
-    return saved[-1]
+  saved, sent = count_saves(), []
+  rollout, latest = mujoco.batch.Batch.rollout, checkpoints.latest
 
   def stopping_rollout(self, *args, **kwargs):
     if saved and not sent and threading.current_thread() is threading.main_thread():
@@ -147,9 +158,27 @@ def stop_in_physics(signals: str) -> None:
       _send_and_wait(again[0], "while the stopped run puts its folder right")
     return latest(*args, **kwargs)
 
-  checkpoints.save = counted_save
   mujoco.batch.Batch.rollout = stopping_rollout
   checkpoints.latest = latest_pressed_again
+
+
+def stop_in_finalizer() -> None:
+  """FAULT_STOP_IN_FINALIZER: see the module's docstring."""
+  from discosyn_jax.run import logs
+
+  saved, write = count_saves(), logs.TensorBoard.write
+
+  class Finalized:
+    def __del__(self):
+      _send_and_wait(signal.SIGINT, "inside a finalizer")
+
+  def write_dropping_one(self, row, kind):
+    if len(saved) == 1:
+      saved.append(None)
+      Finalized()  # dropped at once: its __del__ runs here
+    return write(self, row, kind)
+
+  logs.TensorBoard.write = write_dropping_one
 
 
 def saves(run_dir: pathlib.Path) -> None:
@@ -200,6 +229,8 @@ def main() -> int:
     tasks.registry.make_envs = physics_envs
   if os.environ.get("FAULT_STOP_IN_PHYSICS"):
     stop_in_physics(os.environ["FAULT_STOP_IN_PHYSICS"])
+  if os.environ.get("FAULT_STOP_IN_FINALIZER"):
+    stop_in_finalizer()
   presets.preset = lambda name: TOY
   return cli.main(sys.argv[1:])
 

@@ -557,6 +557,28 @@ def test_ctrl_c_before_the_first_checkpoint_of_a_new_run_leaves_nothing(tmp_path
   assert list(tmp_path.iterdir()) == []
 
 
+def test_a_stop_where_python_drops_the_exception_still_stops_the_run_at_its_next_step(tmp_path):
+  """The signal lands in a finalizer (as in a garbage-collector callback, or a weakref's):
+  Python drops the KeyboardInterrupt raised there, and the run would go on, deaf to a
+  second Ctrl-C (tests/fault_worker.py: FAULT_STOP_IN_FINALIZER)."""
+  run_dir = tmp_path / "run"
+  proc = _long_run(run_dir, env={"FAULT_STOP_IN_FINALIZER": "1"})
+  try:
+    out, err = proc.communicate(timeout=120)
+  except subprocess.TimeoutExpired:
+    proc.kill()
+    pytest.fail(f"the run went on after the stop; its output: {proc.communicate()[0][-2000:]}")
+  assert "SIGINT sent inside a finalizer" in out
+  assert "the wait inside a finalizer ran to its end" not in out  # raised where it landed
+  code = proc.returncode
+  assert code == 130 and len(err.strip().splitlines()) == 1, err
+  line = err.strip()
+  assert line.startswith("discosyn: stopped by Ctrl-C: training stopped at step "), line
+  resume_from = pathlib.Path(line.split("; it resumes from ")[1].split(": ")[0])
+  assert resume_from.parent.parent == run_dir and checkpoints.verify(resume_from) >= 2
+  assert not (run_dir / layout.LOCK).exists()
+
+
 @pytest.mark.parametrize("signals, status, name", [("SIGINT", 130, "Ctrl-C"),
                                                    ("SIGINT,SIGINT", 130, "Ctrl-C"),
                                                    ("SIGTERM,SIGINT", 143, "SIGTERM")])
@@ -584,7 +606,7 @@ def test_a_stop_inside_the_physics_callback_even_pressed_twice_ends_in_one_line(
     end = checkpoints.verify(resume_from) + 2
     resumed = worker("train", "--out", run_dir, "--resume", "--steps", end, "--no-progress",
                      env={"FAULT_PHYSICS": "1"})
-    code, err = _ended(resumed)
+    code, err = _ended(resumed, timeout=120.0)  # a whole start: compile and all
     assert code == 0, err
     steps = [row["step"] for row in logs.read_jsonl(run_dir / layout.METRICS_FILE)]
     assert steps == list(range(1, end + 1))

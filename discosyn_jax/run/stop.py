@@ -1,18 +1,18 @@
 """Stops (Ctrl-C, SIGTERM) wherever they land.
 
 Inside `handled()` (the `discosyn` command's whole run; `training.loop.train` when a script
-or a notebook calls it) Ctrl-C raises KeyboardInterrupt and SIGTERM `Terminated`, at once
-where Python can take them: between steps, in an evaluation, after a compile or a save
-(saves hold signals until they end). Two places cannot take them, and this module covers
-them:
+or a notebook calls it) Ctrl-C raises KeyboardInterrupt and SIGTERM `Terminated`, at once,
+where the signal lands: between steps, in an evaluation, after a compile or a save (saves
+hold signals until they end). The stop is recorded as it is raised (`raised`), for two kinds
+of place that cannot take it:
 
-- a garbage-collector callback (JAX registers one): Python prints an exception raised there
-  and drops it. The stop is parked (`defer`) and the training loop raises it at its next
-  step (`check`).
+- where Python drops an exception: a garbage-collector callback (JAX registers one), a
+  finalizer (`__del__`, a weakref's callback). The run would go on, deaf to a second signal;
+  the training loop raises the stop again at its next step (`check`).
 - a host callback inside a jitted computation (the native physics, `jax.pure_callback`):
   the stop aborts the computation, which JAX reports as its own error (a JaxRuntimeError
-  wrapping the KeyboardInterrupt). The stop is recorded before it is raised (`raised`), so
-  that whoever catches that error takes it for the stop it is (`taken`).
+  wrapping the KeyboardInterrupt); whoever catches that error takes it for the stop it is
+  (`taken`).
 
 A second signal while a stop is under way is ignored (`under_way`): the first one's clean-up
 (the run's folder put right, its one line) is short and must not be cut.
@@ -27,27 +27,12 @@ import signal
 import sys
 import threading
 
-_pending: list[BaseException] = []  # parked stops, not raised yet
 _raised: list[BaseException] = []  # the stop under way
 _open: list[bool] = []  # a handled() block is open: an inner one leaves its handlers alone
 
 
 class Terminated(KeyboardInterrupt):
   """SIGTERM (a scheduler ending the job): it stops a run as Ctrl-C does."""
-
-
-def in_gc_callback(frame) -> bool:
-  """Whether `frame` (a signal handler's) runs inside a garbage-collector callback."""
-  codes = {getattr(callback, "__code__", None) for callback in gc.callbacks}
-  while frame is not None:
-    if frame.f_code in codes:
-      return True
-    frame = frame.f_back
-  return False
-
-
-def defer(exception: BaseException) -> None:
-  _pending.append(exception)
 
 
 def raised(exception: BaseException) -> BaseException:
@@ -69,14 +54,14 @@ def taken(error: BaseException) -> BaseException | None:
 
 
 def check() -> None:
-  """Raise a parked stop, if any."""
-  if _pending:
-    raise raised(_pending.pop())
+  """Raise the stop under way, if any: code that runs on after it was raised (a training
+  loop's next step) runs because Python dropped it where it landed."""
+  if _raised:
+    raise _raised[-1]
 
 
 def reset() -> None:
   """Forget every stop: a caller (a notebook, a test) goes on in the same process."""
-  _pending.clear()
   _raised.clear()
 
 
@@ -90,15 +75,12 @@ def quiet() -> None:
 
 
 def stopper(exception_type):
-  """A signal handler that raises the stop at once; where the signal landed inside a
-  garbage-collector callback (which would print and drop the exception), at the training
-  loop's next step; a second signal while a stop is under way lets the first one end."""
+  """A signal handler that raises the stop where it lands; a second signal while a stop is
+  under way lets the first one end."""
   def handler(signum, frame):
+    del signum, frame
     quiet()  # the run ends: from here on, one line (handled() sets it back)
     if under_way():
-      return
-    if in_gc_callback(frame):
-      defer(exception_type())
       return
     raise raised(exception_type())
 

@@ -195,7 +195,7 @@ def _train(trainer: Trainer, run_dir: pathlib.Path, resume: bool, writer: owner.
                   time.perf_counter() - start)
       tick = time.perf_counter()
       while int(state.step) < config.steps:
-        stop.check()  # a Ctrl-C or SIGTERM its handler could not raise where it landed
+        stop.check()  # a Ctrl-C or SIGTERM that Python dropped where it landed (a finalizer)
         state, metrics = train_step(state)
         if reference is not None:
           metrics.update(trainer.decoder_drift(reference, state.params))
