@@ -6,8 +6,9 @@
   discosyn bench --no-train --tasks set2 unseen sparse --batches 64         # physics only
 
 For every backend and batch size (envs per task) it prints, in env (control) steps per second:
-  rollout    raw `mujoco.rollout` of the same models (batch envs x unroll_length steps per
-             task, one task after the other as in the train step): the machine's limit
+  rollout    raw `mujoco.rollout` of the same models, states and controls (batch envs x
+             unroll_length steps per task from the tasks' reset states, one task after the
+             other as in the train step): the machine's limit
   physics    the jitted, vmapped `HandEnv.step` of the backend over the same steps
   train      whole train steps of the preset (rollouts, GAE, PPO epochs, discriminator)
   train/rollout, physics/rollout   the ratios, median over --repeats with min-max: every
@@ -46,45 +47,59 @@ def native_threads() -> int:
   return checks.env_int("DISCOSYN_NATIVE_THREADS", os.cpu_count() or 1)
 
 
-class RawRollout:
-  """`mujoco.rollout` of one task's model: `batch` envs x `steps` control steps from the
-  initial state, random controls held for the task's substeps."""
-
-  def __init__(self, env, batch: int, steps: int, nthread: int):
-    import mujoco
-    from mujoco import rollout
-
-    self.model, n = env.mj_model, env.task.config.n_substeps
-    self.data = [mujoco.MjData(self.model) for _ in range(nthread)]
-    mujoco.mj_forward(self.model, self.data[0])
-    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
-    state = np.empty(mujoco.mj_stateSize(self.model, spec))
-    mujoco.mj_getState(self.model, self.data[0], state, spec)
-    self.state = np.tile(state, (batch, 1))
-    lo, hi = self.model.actuator_ctrlrange.T
-    self.ctrl = np.random.default_rng(0).uniform(lo, hi, (batch, steps, self.model.nu)).repeat(n, axis=1)
-    self.pool = rollout.Rollout(nthread=nthread)
-
-  def __call__(self):
-    self.pool.rollout(self.model, self.data, self.state, self.ctrl)
-
-  def close(self):
-    self.pool.close()
-
-
-def physics_runner(envs, batch: int, steps: int):
-  """(a function that steps every env `steps` times at `batch`, compile seconds)."""
+def bench_inputs(envs, batch: int, steps: int):
+  """(each env's reset states, the actions): what the physics runner steps and the raw
+  rollout replays, so that both time the same trajectories (random postures from the
+  tasks' own initial states, not the model's rest pose, where the hand touches nothing)."""
   import jax
 
   key = jax.random.PRNGKey(0)
   states = [jax.jit(jax.vmap(env.reset))(jax.random.split(key, batch)) for env in envs]
   actions = jax.random.uniform(key, (steps, batch, envs[0].action_size), minval=-1, maxval=1)
+  return states, actions
+
+
+class RawRollout:
+  """`mujoco.rollout` of one task's model: `batch` envs x `steps` control steps from the
+  env's reset `state` (a batch of them), the env's controls for `actions` held for the
+  task's substeps."""
+
+  def __init__(self, env, state, actions, nthread: int):
+    import mujoco
+    from mujoco import rollout
+
+    self.model, n = env.mj_model, env.task.config.n_substeps
+    self.data = [mujoco.MjData(self.model) for _ in range(nthread)]
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    view = env.physics.view(state.pipeline_state)
+    qpos, qvel = np.asarray(view.qpos, np.float64), np.asarray(view.qvel, np.float64)
+    self.state = np.empty((len(qpos), mujoco.mj_stateSize(self.model, spec)))
+    data = self.data[0]
+    for row, (q, v) in enumerate(zip(qpos, qvel)):
+      data.qpos[:], data.qvel[:] = q, v
+      mujoco.mj_forward(self.model, data)
+      mujoco.mj_getState(self.model, data, self.state[row], spec)
+    ctrl = np.asarray(env.action_to_ctrl(actions), np.float64)  # (steps, batch, nu)
+    self.ctrl = np.ascontiguousarray(ctrl.transpose(1, 0, 2).repeat(n, axis=1))
+    self.pool = rollout.Rollout(nthread=nthread)
+
+  def __call__(self):
+    return self.pool.rollout(self.model, self.data, self.state, self.ctrl)
+
+  def close(self):
+    self.pool.close()
+
+
+def physics_runner(envs, states, actions):
+  """(a function that steps every env from its `states` through `actions`, compile
+  seconds)."""
+  import jax
 
   def run(states, actions):
     out = []
     for env, state in zip(envs, states):
       step = jax.vmap(env.step)
-      out.append(jax.lax.scan(lambda s, a: (step(s, a), None), state, actions)[0].obs)
+      out.append(jax.lax.scan(lambda s, a: (step(s, a), None), state, actions)[0])
     return out
 
   start = time.perf_counter()
@@ -164,8 +179,9 @@ def bench_row(config, args) -> dict:
   clock = CallbackClock(envs)
   T, B = config.unroll_length, config.num_envs
   total = len(envs) * B * T  # env steps of one pass over every task
-  raw = [RawRollout(env, B, T, native_threads()) for env in envs]
-  physics, physics_compile = physics_runner(envs, B, T)
+  states, actions = bench_inputs(envs, B, T)
+  raw = [RawRollout(env, state, actions, native_threads()) for env, state in zip(envs, states)]
+  physics, physics_compile = physics_runner(envs, states, actions)
   row = dict(backend=envs[0].backend, batch=B, physics_compile=physics_compile)
   if trainer:
     state = trainer.init()

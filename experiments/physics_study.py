@@ -119,10 +119,10 @@ def fidelity(env, name: str, episodes: int, long_episodes: int, long_steps: int,
 
 def mjx_cost(name: str, setting: str, batch: int, steps: int) -> tuple[float, float]:
   """(compile s, env/s) of MJX's vmapped step scan (small on a CPU)."""
-  from experiments.bench import physics_runner
+  from experiments.bench import bench_inputs, physics_runner
 
   env = make_env(name, setting, backend="mjx")
-  run, compile_s = physics_runner([env], batch, steps)
+  run, compile_s = physics_runner([env], *bench_inputs([env], batch, steps))
   run()
   start = time.perf_counter()
   run()
@@ -130,13 +130,15 @@ def mjx_cost(name: str, setting: str, batch: int, steps: int) -> tuple[float, fl
 
 
 def study(names, settings, args) -> list[Row]:
-  from experiments.bench import RawRollout, native_threads, physics_runner
+  from experiments.bench import RawRollout, bench_inputs, native_threads, physics_runner
 
   rows = {(n, s): Row(n, s) for n in names for s in settings}
   for name in names:
     envs = {s: make_env(name, s) for s in settings}
-    runners = {s: physics_runner([envs[s]], args.batch, args.steps)[0] for s in settings}
-    raws = {s: RawRollout(envs[s], args.batch, args.steps, native_threads()) for s in settings}
+    inputs = {s: bench_inputs([envs[s]], args.batch, args.steps) for s in settings}
+    runners = {s: physics_runner([envs[s]], *inputs[s])[0] for s in settings}
+    raws = {s: RawRollout(envs[s], inputs[s][0][0], inputs[s][1], native_threads())
+            for s in settings}
     for s in settings:  # warm-up
       runners[s]()
       raws[s]()

@@ -1,4 +1,7 @@
-"""`discosyn bench`: one row per backend and batch; bad input is exit 2."""
+"""`discosyn bench`: one row per backend and batch; its raw-MuJoCo limit steps the same
+trajectories as the env it is the limit of; bad input is exit 2."""
+
+import numpy as np
 
 from discosyn import cli
 
@@ -18,3 +21,26 @@ def test_bench_prints_a_physics_row_per_batch_and_profile(capsys):
 def test_bench_refuses_zero_repeats(capsys):
   assert cli.main(["bench", "--repeats", "0", "--no-train"]) == 2
   assert "--repeats must be at least 1" in capsys.readouterr().err
+
+
+def test_the_raw_limit_replays_the_envs_own_states_and_controls():
+  import tasks
+  from discosyn_jax.config import TrainConfig
+  from experiments.bench import RawRollout, bench_inputs, physics_runner
+
+  envs = tasks.make_envs(TrainConfig(tasks=("valve1", "valve3"), backend="native"))
+  states, actions = bench_inputs(envs, 4, 5)
+  run, _ = physics_runner(envs, states, actions)
+  for env, state, final in zip(envs, states, run()):
+    raw = RawRollout(env, state, actions, nthread=1)
+    try:
+      trajectory, _ = raw()  # (batch, steps x substeps, [time, qpos, ...])
+    finally:
+      raw.close()
+    nq = env.mj_model.nq
+    assert trajectory.shape[:2] == (4, 5 * env.task.config.n_substeps)
+    np.testing.assert_array_equal(raw.state[:, 1:1 + nq], np.asarray(state.pipeline_state.qpos))
+    moved = np.abs(trajectory[:, -1, 1:1 + nq] - raw.state[:, 1:1 + nq]).max()
+    assert moved > 1e-2  # the hand moved: the comparison below is not of two rest poses
+    np.testing.assert_allclose(trajectory[:, -1, 1:1 + nq], np.asarray(final.pipeline_state.qpos),
+                               atol=1e-5)
