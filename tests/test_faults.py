@@ -463,6 +463,15 @@ def _long_run(run_dir, *flags, env=None):
   return worker("train", "--out", run_dir, "--no-progress", "--steps", "100000", *flags, env=env)
 
 
+def _resumes_from(line: str, run_dir) -> int:
+  """The step of the checkpoint that a stopped run's line says it resumes from: one of
+  `run_dir`'s, whole; the run's lock is gone."""
+  checkpoint = pathlib.Path(line.split("; it resumes from ")[1].split(": ")[0])
+  assert checkpoint.parent.parent == run_dir
+  assert not (run_dir / layout.LOCK).exists()
+  return checkpoints.verify(checkpoint)
+
+
 def _periodic_steps(run_dir) -> list[int]:
   folder = run_dir / "checkpoints"
   return [int(p.name) for p in folder.glob("*") if p.name.isdigit()] if folder.is_dir() else []
@@ -521,10 +530,8 @@ def test_ctrl_c_and_sigterm_end_a_run_in_one_line_that_says_where_it_resumes(tmp
   line = err.strip()
   assert code == status and len(err.strip().splitlines()) == 1, err
   assert line.startswith(f"discosyn: stopped by {name}: training stopped at step "), line
-  resume_from = pathlib.Path(line.split("; it resumes from ")[1].split(": ")[0])
   assert line.endswith(f": discosyn train --out {run_dir} --resume")
-  assert resume_from.parent.parent == run_dir and checkpoints.verify(resume_from) >= 4
-  assert not (run_dir / layout.LOCK).exists()
+  assert _resumes_from(line, run_dir) >= 4
 
 
 @pytest.mark.parametrize("signum, name", [(signal.SIGINT, "KeyboardInterrupt"),
@@ -541,9 +548,7 @@ def test_a_script_calling_the_training_loop_is_stopped_as_cleanly_as_the_command
   assert proc.returncode == 1, err
   line = out.strip().splitlines()[-1]
   assert line.startswith(f"{name}: training stopped at step "), line
-  resume_from = pathlib.Path(line.split("; it resumes from ")[1].split(": ")[0])
-  assert resume_from.parent.parent == run_dir and checkpoints.verify(resume_from) >= 4
-  assert not (run_dir / layout.LOCK).exists()
+  assert _resumes_from(line, run_dir) >= 4
 
 
 def test_ctrl_c_before_the_first_checkpoint_of_a_new_run_leaves_nothing(tmp_path):
@@ -574,9 +579,7 @@ def test_a_stop_where_python_drops_the_exception_still_stops_the_run_at_its_next
   assert code == 130 and len(err.strip().splitlines()) == 1, err
   line = err.strip()
   assert line.startswith("discosyn: stopped by Ctrl-C: training stopped at step "), line
-  resume_from = pathlib.Path(line.split("; it resumes from ")[1].split(": ")[0])
-  assert resume_from.parent.parent == run_dir and checkpoints.verify(resume_from) >= 2
-  assert not (run_dir / layout.LOCK).exists()
+  assert _resumes_from(line, run_dir) >= 2
 
 
 @pytest.mark.parametrize("signals, status, name", [("SIGINT", 130, "Ctrl-C"),
@@ -599,11 +602,10 @@ def test_a_stop_inside_the_physics_callback_even_pressed_twice_ends_in_one_line(
   line = err.strip()
   assert line.startswith(f"discosyn: stopped by {name}: training stopped at step "), line
   assert line.endswith(f": discosyn train --out {run_dir} --resume"), line
-  resume_from = pathlib.Path(line.split("; it resumes from ")[1].split(": ")[0])
-  assert resume_from.parent.parent == run_dir and checkpoints.verify(resume_from) >= 2
-  assert not (run_dir / layout.LOCK).exists()
+  resumed_at = _resumes_from(line, run_dir)
+  assert resumed_at >= 2
   if signals == "SIGINT":  # and the run goes on from there
-    end = checkpoints.verify(resume_from) + 2
+    end = resumed_at + 2
     resumed = worker("train", "--out", run_dir, "--resume", "--steps", end, "--no-progress",
                      env={"FAULT_PHYSICS": "1"})
     code, err = _ended(resumed, timeout=120.0)  # a whole start: compile and all
