@@ -29,7 +29,7 @@ def _yes_no(text: str) -> bool:
 
 def build_parser() -> argparse.ArgumentParser:
   from discosyn_jax import config as config_lib
-  from experiments import presets  # TrainConfig only, no JAX
+  from discosyn_jax.experiments import presets  # TrainConfig only, no JAX
 
   parser = _Parser(prog="discosyn", description=__doc__)
   sub = parser.add_subparsers(dest="command", required=True)
@@ -48,7 +48,7 @@ def build_parser() -> argparse.ArgumentParser:
              "physics": config_lib.PHYSICS}
 
   p = sub.add_parser("train", help="train synergies and policies (a preset, flags replace fields)")
-  p.add_argument("--preset", help="a named config of experiments/presets.py: "
+  p.add_argument("--preset", help="a named config of discosyn_jax/experiments/presets.py: "
                  f"{', '.join(presets.PRESETS)} (default: quickstart; with --resume: the run's "
                  "own)")
   p.add_argument("--tasks", nargs="+", help=f"{docs['tasks']}; or FILE.py:CLASS, a task of "
@@ -110,7 +110,7 @@ def build_parser() -> argparse.ArgumentParser:
 
   p = sub.add_parser(
       "experiment", help="run one of the paper's experiments, or all, at a scale "
-      "(experiments/paper.py); finished steps are kept, unfinished ones resumed",
+      "(discosyn_jax/experiments/paper.py); finished steps are kept, unfinished ones resumed",
       description="Run one of the paper's experiments at a scale, a folder per step in --out. "
       "A step whose folder holds a finished run of the same config is kept: its final "
       "checkpoint, or its record alone (config.json, eval.jsonl, experiment.json, "
@@ -226,7 +226,7 @@ def add_device_flags(p) -> None:
 
 
 def add_bench_parser(sub) -> None:
-  from experiments import bench
+  from discosyn_jax.experiments import bench
 
   p = sub.add_parser("bench", help="physics and training env steps/s beside raw MuJoCo C")
   bench.build_parser(p)
@@ -275,14 +275,14 @@ def entry() -> None:
 
 def _run(args) -> int:
   import discosyn_jax
-  from discosyn_jax.run import stop
+  from discosyn_jax.run import jax_setup, stop
 
   try:
     if getattr(args, "distributed", False):  # before anything touches a device
       from discosyn_jax.training import devices
 
       devices.initialize_distributed()
-    discosyn_jax.setup_jax()  # before anything imports MJX (brax, through loop)
+    jax_setup.setup_jax()  # before anything imports MJX (brax, through loop)
     from discosyn_jax import checks
 
     checks.jax_environment(discosyn_jax.XLA_FLAG)

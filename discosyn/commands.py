@@ -15,8 +15,7 @@ class UsageError(Exception):
 
 
 def cmd_tasks(args) -> None:
-  import tasks
-
+  from discosyn_jax import tasks
   print(f"{'task':16s} {'obs':>4s} {'act':>4s}  {'sets':10s} description")
   for name, entry in tasks.REGISTRY.items():
     env = tasks.make(name, backend="native")
@@ -32,7 +31,7 @@ def cmd_demo(args) -> None:
   import jax
   import jax.numpy as jnp
 
-  import tasks
+  from discosyn_jax import tasks
   from discosyn_jax.env import rollouts
 
   print(f"random policy, {args.batch} envs x one episode per task; neutral: the zero action")
@@ -64,7 +63,7 @@ def cmd_render_scenes(args) -> None:
   import jax.numpy as jnp
   from PIL import Image
 
-  import tasks
+  from discosyn_jax import tasks
   from discosyn_jax.env import hands, scripted
   from discosyn_jax.viz import render
 
@@ -110,8 +109,8 @@ TRAIN_FLAGS = {
 
 def train_config(args, base=None):
   """The preset (or, when resuming, the run's own config) with the flags given applied."""
-  import tasks
-  from experiments import presets
+  from discosyn_jax import tasks
+  from discosyn_jax.experiments import presets
 
   if base is None or args.preset is not None:
     base = presets.preset("quickstart" if args.preset is None else args.preset)
@@ -136,7 +135,7 @@ def train_config(args, base=None):
 
 
 def cmd_train(args) -> None:
-  import tasks
+  from discosyn_jax import tasks
   from discosyn_jax import config as config_lib
   from discosyn_jax.run import owner
   from discosyn_jax.training import devices, loop
@@ -177,7 +176,7 @@ def next_commands(out: pathlib.Path, step, config, results) -> str:
 def cmd_eval(args) -> None:
   import jax
 
-  import tasks
+  from discosyn_jax import tasks
   from discosyn_jax.training import evaluation, loop
 
   changes = {"backend": args.backend} if args.backend else {}
@@ -203,7 +202,7 @@ def _check_scenes(trainer, run, what: str) -> None:
 
 
 def cmd_synergies(args) -> None:
-  import tasks
+  from discosyn_jax import tasks
   from discosyn_jax.run import reading
   from discosyn_jax.training import loop
   from discosyn_jax.viz import synergy_pictures
@@ -221,7 +220,7 @@ def cmd_synergies(args) -> None:
 
 
 def cmd_render(args) -> None:
-  import tasks
+  from discosyn_jax import tasks
   from discosyn_jax.run import reading
   from discosyn_jax.training import loop
   from discosyn_jax.viz import videos
@@ -243,7 +242,7 @@ def cmd_render(args) -> None:
 
 
 def cmd_experiment(args) -> None:
-  from experiments import paper
+  from discosyn_jax.experiments import paper
 
   out = pathlib.Path(args.out)
   seeds = tuple(args.seeds) if args.seeds else getattr(paper.SCALES.get(args.scale), "seeds", (0,))
@@ -257,7 +256,7 @@ def cmd_experiment(args) -> None:
 
 
 def cmd_keep(args) -> None:
-  from experiments import record
+  from discosyn_jax.experiments import record
 
   for folder in record.keep(pathlib.Path(args.out), pathlib.Path(args.dest)):
     print(folder)
@@ -274,7 +273,7 @@ def cmd_upgrade(args) -> None:
 
 
 def cmd_report(args) -> None:
-  from experiments import report
+  from discosyn_jax.experiments import report
 
   path = report.write(args.runs, pathlib.Path(args.out), threshold=args.threshold,
                       with_tsne=not args.no_tsne, force=args.force)

@@ -17,29 +17,10 @@ if _sys.platform.startswith("linux") and not _os.environ.get("DISPLAY"):
 __version__ = "0.1.0"
 
 
-_jax_ready = False
 
 
 def setup_jax() -> None:
-  """Once per process, before this package's JAX work: MuJoCo's MJX imported without the
-  "Failed to import warp" lines it prints on stdout wherever the optional Warp package is
-  absent (the CPU path never needs it), and the persistent compile cache turned on
-  (compile_cache.py). `import tasks` and the CLI call it; the package's own import does
-  not, so that `discosyn --help` answers without importing JAX."""
-  global _jax_ready
-  if _jax_ready:
-    return
-  import contextlib
-  import io
+  """MJX imported quietly and the persistent compile cache on (run/jax_setup.py)."""
+  from discosyn_jax.run import jax_setup
 
-  captured = io.StringIO()
-  with contextlib.redirect_stdout(captured):
-    import mujoco.mjx  # noqa: F401
-  for line in captured.getvalue().splitlines():
-    if not line.startswith(("Failed to import warp", "Failed to import mujoco_warp")):
-      print(line, file=_sys.stdout)
-
-  from discosyn_jax.run import compile_cache
-
-  compile_cache.enable()
-  _jax_ready = True
+  jax_setup.setup_jax()

@@ -1,6 +1,6 @@
 """The typed configuration of a training run, and its checks.
 
-One frozen dataclass holds everything a run depends on; presets (experiments/presets.py)
+One frozen dataclass holds everything a run depends on; presets (discosyn_jax/experiments/presets.py)
 are instances of it, command-line flags replace fields. The same config rebuilds the
 network and the environments when a run is resumed or evaluated.
 """
@@ -28,7 +28,7 @@ DECODER_INITS = ("random", *PRIORS)
 DISCRIMINATOR_TARGETS = ("z", "activation")
 BACKENDS = ("auto", "native", "mjx")  # auto: native on a CPU, mjx on an accelerator
 CONTROL_DT = 0.04  # s: one control step of every task
-# The physics of the tasks (tasks/registry.py, physics_overrides): "reference" is 10 MuJoCo
+# The physics of the tasks (discosyn_jax/tasks/registry.py, physics_overrides): "reference" is 10 MuJoCo
 # steps of 4 ms per control step for every task, what every run before this field ran;
 # "fast" is each task's cheapest setting that stays faithful to the reference
 # (docs/BENCHMARKS.md, "Physics settings"). A profile never changes once runs use it: a

@@ -33,8 +33,9 @@ os.environ["XLA_FLAGS"] = " ".join([os.environ.get("XLA_FLAGS", ""), *_FAST_COMP
 import pytest  # noqa: E402
 
 import discosyn_jax  # noqa: E402  (sets XLA flags before anything imports jax)
+from discosyn_jax.run import jax_setup  # noqa: E402
 
-discosyn_jax.setup_jax()
+jax_setup.setup_jax()
 
 
 class _FileProgress:

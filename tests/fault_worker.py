@@ -38,10 +38,11 @@ import time
 import types
 
 import discosyn_jax
+from discosyn_jax.run import jax_setup  # noqa: E402
 
 # before brax imports MJX: MJX prints "Failed to import warp" on stdout, which the test
 # reads line by line ("ready", then each saved step)
-discosyn_jax.setup_jax()
+jax_setup.setup_jax()
 
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
@@ -197,7 +198,7 @@ def saves(run_dir: pathlib.Path) -> None:
 def library(run_dir: pathlib.Path) -> int:
   import dataclasses
 
-  import tasks
+  from discosyn_jax import tasks
   from discosyn_jax.training import loop
 
   config = dataclasses.replace(TOY, steps=100000, eval_every=0)
@@ -218,9 +219,9 @@ def main() -> int:
     except checkpoints.SaveFailed as err:
       print(f"save failed: {err}", file=sys.stderr)
       return 2
-  import tasks.registry
+  import discosyn_jax.tasks.registry
   from discosyn import cli
-  from experiments import presets
+  from discosyn_jax.experiments import presets
 
   tasks.registry.make_envs = toy_envs
   if mode == "library":

@@ -10,7 +10,7 @@ import numpy as np
 from mujoco import mjx
 from tensorboardX.proto import event_pb2
 
-import tasks
+from discosyn_jax import tasks
 from discosyn_jax.env.rollouts import run_episode  # noqa: F401  (the tests' episodes)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # the checkout

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from discosyn_jax.training.train import Trainer
-from experiments import paper, presets, record, report
+from discosyn_jax.experiments import paper, presets, record, report
 from tests.toy_env import ReachAction
 
 FIXTURE = pathlib.Path(__file__).resolve().parent / "fixtures" / "report-ci"

@@ -7,7 +7,7 @@ import mujoco
 import numpy as np
 import pytest
 
-import tasks
+from discosyn_jax import tasks
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import hands, physics
 from tests import helpers

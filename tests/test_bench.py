@@ -24,9 +24,9 @@ def test_bench_refuses_zero_repeats(capsys):
 
 
 def test_the_raw_limit_replays_the_envs_own_states_and_controls():
-  import tasks
+  from discosyn_jax import tasks
   from discosyn_jax.config import TrainConfig
-  from experiments.bench import RawRollout, bench_inputs, physics_runner
+  from discosyn_jax.experiments.bench import RawRollout, bench_inputs, physics_runner
 
   envs = tasks.make_envs(TrainConfig(tasks=("valve1", "valve3"), backend="native"))
   states, actions = bench_inputs(envs, 4, 5)

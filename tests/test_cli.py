@@ -8,7 +8,7 @@ import pytest
 
 from discosyn import cli, commands
 from discosyn_jax import config as config_lib
-from experiments import presets
+from discosyn_jax.experiments import presets
 from tests.helpers import ROOT
 
 

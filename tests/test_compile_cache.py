@@ -22,7 +22,7 @@ def test_the_cache_folder_follows_the_environment(monkeypatch, tmp_path):
 
 
 def test_setting_up_jax_turned_it_on():
-  import tasks  # noqa: F401  (sets JAX up, as the CLI does before a command)
+  from discosyn_jax import tasks  # noqa: F401  (sets JAX up, as the CLI does before a command)
 
   if compile_cache.folder() is not None:  # unless this run says off
     assert jax.config.jax_compilation_cache_dir == str(compile_cache.folder())

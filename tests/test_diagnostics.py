@@ -83,7 +83,7 @@ def test_solving_actions_reads_where_a_policys_actions_lie(tmp_path):
   """A decoder spanning the plane a policy's actions lie in holds all of their variance and
   overlaps PCA-4 of them fully; one orthogonal to it holds none."""
   from discosyn_jax.synergies import fitting
-  from experiments import solving_actions
+  from studies import solving_actions
 
   rng = np.random.default_rng(0)
   basis = np.linalg.qr(rng.normal(size=(20, 20)))[0]

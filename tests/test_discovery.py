@@ -9,14 +9,14 @@ import numpy as np
 import optax
 import pytest
 
-import tasks
+from discosyn_jax import tasks
 from discosyn_jax.agent import networks, ppo
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.run import checkpoints
 from discosyn_jax.synergies import diagnostics, discovery, fitting
 from discosyn_jax.training.train import Trainer
-from experiments import paper, presets, report
-from tasks import planted
+from discosyn_jax.experiments import paper, presets, report
+from discosyn_jax.tasks import planted
 from tests.toy_env import ReachAction
 
 TARGET = np.linspace(-0.8, 0.8, 20)
@@ -245,7 +245,7 @@ def test_the_decayed_variant_is_planned_beside_the_papers_update_with_its_own_ma
 
 
 def test_the_gpu_check_trains_a_tables_rows_as_the_experiment_does():
-  from experiments.device import gpu_check
+  from benchmarks.gpu import gpu_check
 
   got = gpu_check.configs(["DiscoSyn3-L-reward", "Random3-L-zfree"], "set1", "gpu", 0, "mjx")
   default, control = got["DiscoSyn3-L-reward"], got["Random3-L-zfree"]

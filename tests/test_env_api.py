@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from brax.envs.wrappers import training
 
-import tasks
+from discosyn_jax import tasks
 from tests import helpers
 
 
@@ -98,9 +98,9 @@ def test_a_wheel_carries_the_xml_and_works_outside_the_checkout(tmp_path):
   with zipfile.ZipFile(wheel) as zf:
     names = set(zf.namelist())
     assert {"discosyn_jax/xml/hands/shadow20.xml", "discosyn_jax/xml/hands/leap16.xml",
-            "discosyn_jax/xml/objects/valve0.xml", "tasks/valve.py"} <= names
+            "discosyn_jax/xml/objects/valve0.xml", "discosyn_jax/tasks/valve.py"} <= names
     zf.extractall(tmp_path / "site")
-  code = ("import tasks, discosyn_jax.env.assets as a; env = tasks.make('valve3', backend='native');"
+  code = ("from discosyn_jax import tasks; import discosyn_jax.env.assets as a; env = tasks.make('valve3', backend='native');"
           "print('RESULT', tasks.__file__, a.xml_dir(), env.observation_size)")
   out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True,
                        env={"PYTHONPATH": str(tmp_path / "site"), "PATH": "/usr/bin:/bin",

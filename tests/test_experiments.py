@@ -19,7 +19,7 @@ from discosyn_jax.run import checkpoints, layout, logs, reading
 from discosyn_jax.synergies import fitting
 from discosyn_jax.training import loop
 from discosyn_jax.training.train import Trainer, _episode_metrics
-from experiments import paper, presets, record, report, report_runs
+from discosyn_jax.experiments import paper, presets, record, report, report_runs
 from tests import reference
 from tests.toy_env import ReachAction
 

@@ -28,8 +28,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-import tasks
-import tasks.registry
+from discosyn_jax import tasks
+import discosyn_jax.tasks.registry
 from discosyn import cli
 from discosyn_jax import atomic
 from discosyn_jax import config as config_lib
@@ -37,7 +37,7 @@ from discosyn_jax.run import checkpoints, layout, logs, reading
 from discosyn_jax.training import loop
 from discosyn_jax.training.train import Trainer
 from discosyn_jax.viz import videos
-from experiments import report_runs
+from discosyn_jax.experiments import report_runs
 from tests.fault_worker import TOY, small_state, toy_envs
 from tests.helpers import tensorboard_scalars
 
@@ -292,7 +292,7 @@ def unbroken(tmp_path_factory):
 @pytest.fixture
 def toy_tasks(monkeypatch):
   """The CLI's runs on the toy task, as tests/fault_worker.py runs them."""
-  from experiments import presets
+  from discosyn_jax.experiments import presets
 
   monkeypatch.setattr(tasks.registry, "make_envs", toy_envs)
   monkeypatch.setattr(presets, "preset", lambda name: TOY)

@@ -11,7 +11,7 @@ import mujoco
 import numpy as np
 import pytest
 
-import tasks
+from discosyn_jax import tasks
 from discosyn import cli
 from discosyn_jax import config as config_lib
 from discosyn_jax.env import assets, hands, scene, scripted
@@ -189,7 +189,7 @@ def test_the_run_config_keeps_the_hand_and_old_configs_had_ours():
 
 
 def test_an_experiment_on_another_hand_names_its_folders_and_configs_after_it(tmp_path):
-  from experiments import paper, report_runs
+  from discosyn_jax.experiments import paper, report_runs
 
   steps = paper.Planner(tmp_path, "cpu", 0, hand="leap16").plan("discosyn-set1")
   assert "discosyn3-l-prior-set1-leap16-seed0" in {s.name for s in steps}

@@ -7,8 +7,8 @@ import shutil
 
 import pytest
 
-import tasks
-import tasks.registry as registry
+from discosyn_jax import tasks
+import discosyn_jax.tasks.registry as registry
 from discosyn import cli
 from discosyn_jax import config as config_lib
 from discosyn_jax.run import layout

@@ -5,12 +5,12 @@ decoder starts in that subspace with its own scale and bias."""
 import numpy as np
 import pytest
 
-import tasks
+from discosyn_jax import tasks
 from discosyn_jax import config as config_lib
 from discosyn_jax.agent import networks
 from discosyn_jax.synergies import diagnostics, fitting, physics_prior
 from discosyn_jax.training import loop
-from experiments import presets
+from discosyn_jax.experiments import presets
 
 TINY = dict(num_envs=2, unroll_length=4, num_minibatches=2, update_epochs=1, steps=1,
             eval_every=0, eval_envs=2, checkpoint_every=0, backend="native")

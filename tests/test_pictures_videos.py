@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-import tasks
+from discosyn_jax import tasks
 from discosyn import cli
 from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig

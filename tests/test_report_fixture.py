@@ -26,7 +26,7 @@ def test_logs_without_z_or_checkpoints_report_without_a_t_sne_and_a_failure_leav
     tmp_path, monkeypatch):
   """Logs alone (no z.npz, no checkpoint: runs kept before records) still report, the t-SNE
   drawn from the runs that can give it or left out; a report that fails leaves no folder."""
-  from experiments import report_figures
+  from discosyn_jax.experiments import report_figures
 
   folder = tmp_path / "logs"
   shutil.copytree(FIXTURE, folder)

@@ -1,8 +1,8 @@
-"""experiments/same_logs.py: two folders of runs compared value by value, clocks aside."""
+"""studies/same_logs.py: two folders of runs compared value by value, clocks aside."""
 
 import json
 
-from experiments import same_logs
+from studies import same_logs
 
 
 def write(folder, rows):

@@ -9,10 +9,10 @@ import mujoco
 import numpy as np
 import pytest
 
-import tasks
+from discosyn_jax import tasks
 from discosyn_jax.env import hands, scene, scripted
 from discosyn_jax.env.physics.native import _INTEGRATION
-from tasks import dice, weight_pull
+from discosyn_jax.tasks import dice, weight_pull
 from tests import helpers
 from tests.helpers import run_episode, uniform_policy
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from flax import struct
 
-import tasks
+from discosyn_jax import tasks
 from discosyn import cli
 from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig

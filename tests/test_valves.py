@@ -5,7 +5,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-import tasks
+from discosyn_jax import tasks
 from discosyn_jax.env import hands, scripted
 from discosyn_jax.env.physics.native import deepest_penetration
 from tests import helpers
@@ -66,7 +66,7 @@ def test_random_policy_moves_like_a_hand_not_a_paddle(random_rollouts, name):
 
   Bounds: hand joints below 20 rad/s (the calibration measured 14 at most), the valve
   below 6 rad/s, and no hand-valve penetration deeper than 8 mm (measured: 5.3 mm at most over 256
-  episodes of each valve, experiments/valve_calibration.py).
+  episodes of each valve, studies/valve_calibration.py).
   """
   env, _, states = random_rollouts[name]
   qvel = np.asarray(states.pipeline_state.qvel)

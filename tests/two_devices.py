@@ -13,7 +13,7 @@ import json
 import jax
 import numpy as np
 
-import tasks
+from discosyn_jax import tasks
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.training.train import Trainer
 from tests.test_trainer import two_task_trainer

@@ -7,11 +7,11 @@
   RUN/plots/             the training curves (plots.py)
   RUN/writer.lock        held by the one process that writes the run (owner.py)
   RUN/replaced/          a run --force replaces, until the new one's first checkpoint
-  RUN/experiment.json    what `discosyn experiment` ran it as (experiments/paper.py)
+  RUN/experiment.json    what `discosyn experiment` ran it as (discosyn_jax/experiments/paper.py)
   RUN/decoder.npz        its decoder at the end, a synergy file; RUN/z.npz the z its policy
                          picks per task; RUN/metrics.jsonl.xz: with config.json, eval.jsonl
                          and experiment.json, a finished run's record, kept without its
-                         checkpoints (experiments/record.py)
+                         checkpoints (discosyn_jax/experiments/record.py)
 """
 
 CONFIG_FILE = "config.json"

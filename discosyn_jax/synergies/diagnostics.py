@@ -9,7 +9,7 @@ report
                    largest first (1: the same subspace; a rotated subspace drops the last)
   decoder/cos_min  the smallest of them
   decoder/overlap_start  the overlap (below) of the two subspaces
-and, on tasks with a planted synergy span (tasks/planted.py),
+and, on tasks with a planted synergy span (discosyn_jax/tasks/planted.py),
   decoder/overlap_planted  the overlap of the decoder's subspace with the planted span.
 A frozen decoder reports change 0 and cosines 1. Scaling or mixing the synergies inside their
 subspace moves `change` but not the cosines: only a new subspace lowers them.

@@ -6,7 +6,7 @@ the layout of DiscoSyn's own decoder (linear: `synergies.kernel` (k, 20) and
 `synergies.bias`; mlp: networks.GaussianHead's), plus a JSON `meta` entry with the config
 fields the decoder needs (decoder, n_synergies, decoder_hidden) and its explained variance.
 A run directory works as a source too: its latest checkpoint's decoder, or where its
-checkpoints are not kept (a run's record, experiments/record.py) its decoder.npz.
+checkpoints are not kept (a run's record, discosyn_jax/experiments/record.py) its decoder.npz.
 
 Both fitted decoders take z on a unit scale: PCA's components are scaled by the standard
 deviation along them, the autoencoder's latent code is standardised and the scaling is

@@ -74,7 +74,7 @@ class Trainer:
     self.eval_envs = [wrappers.for_evaluation(env) for env in self.envs]  # evaluate.py
     self._fresh_state = jax.jit(self._initial_state)
     self._fresh_params = jax.jit(self._init_params)
-    # the span the tasks plant, if they do (tasks/planted.py): what the decoder should find
+    # the span the tasks plant, if they do (discosyn_jax/tasks/planted.py): what the decoder should find
     self.planted_span = diagnostics.union_span(
         [env.planted_span for env in self.envs if getattr(env, "planted_span", None) is not None])
     # the decoder's movement from a reference (diagnostics.py); None without a decoder

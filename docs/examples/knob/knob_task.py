@@ -14,7 +14,7 @@ import pathlib
 import jax.numpy as jnp
 
 from discosyn_jax.env.task import Task, TaskConfig
-from tasks import common
+from discosyn_jax.tasks import common
 
 
 @dataclasses.dataclass(frozen=True)

@@ -27,7 +27,7 @@ import mujoco
 
 from discosyn_jax.env.physics import PhysicsView
 from discosyn_jax.env.task import Info, Task, TaskConfig
-from tasks import common
+from discosyn_jax.tasks import common
 
 
 @dataclasses.dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """The task registry: `make(name)` builds a task's environment; `trainer(config)` builds a
 Trainer on the envs of `config.tasks` (the library's Trainer is given its envs: it knows no
-registry). Reached as `tasks.make`, `tasks.trainer`, ... through tasks/__init__.py."""
+registry). Reached as `tasks.make`, `tasks.trainer`, ... through discosyn_jax/tasks/__init__.py."""
 
 from __future__ import annotations
 
@@ -10,9 +10,9 @@ import importlib.util
 import pathlib
 from typing import Callable
 
-import discosyn_jax  # sets XLA flags before jax is imported
+from discosyn_jax.run import jax_setup  # (discosyn_jax sets XLA flags before jax is imported)
 
-discosyn_jax.setup_jax()  # before brax (discosyn_jax/env/hand_env.py) imports MJX
+jax_setup.setup_jax()  # before brax (discosyn_jax/env/hand_env.py) imports MJX
 
 from brax.envs.base import Env  # noqa: E402
 
@@ -20,8 +20,8 @@ from discosyn_jax.config import PHYSICS  # noqa: E402
 from discosyn_jax.env import hands  # noqa: E402
 from discosyn_jax.env.hand_env import HandEnv  # noqa: E402
 from discosyn_jax.env.task import Task, TaskConfig  # noqa: E402
-from tasks import dice, planted, screw, valve, valve_goal, weight_pull  # noqa: E402
-from tasks.sets import TASK_SETS  # noqa: E402
+from discosyn_jax.tasks import dice, planted, screw, valve, valve_goal, weight_pull  # noqa: E402
+from discosyn_jax.tasks.sets import TASK_SETS  # noqa: E402
 
 
 @dataclasses.dataclass(frozen=True)
@@ -75,13 +75,13 @@ REGISTRY: dict[str, Entry] = {
                         "turn the three-armed valve to a goal angle; reward 1 near it, else 0"),
     "valve_goal_dense": Entry(valve_goal.GoalValve, lambda **kw: valve_goal.default_config(dense=True, **kw),
                               "valve_goal with a dense reward 1 - |error| / pi (debugging)"),
-    # the planted-synergy test bed (pure JAX, tasks/planted.py): one span, a plane per task
+    # the planted-synergy test bed (pure JAX, discosyn_jax/tasks/planted.py): one span, a plane per task
     **{f"planted{n}": _planted(n, slack=False) for n in range(4)},
     **{f"planted_slack{n}": _planted(n, slack=True) for n in range(4)},
 }
 
 # The "fast" physics profile: each task's cheapest setting that stayed within the tolerances
-# of the reference (4 ms x 10) in experiments/physics_study.py (docs/BENCHMARKS.md, "Physics
+# of the reference (4 ms x 10) in studies/physics_study.py (docs/BENCHMARKS.md, "Physics
 # settings", 2026-12-02): 8 ms steps, the valves' contacts as stiff as at 4 ms (refsafe off;
 # the screws diverge or bounce so). A task not listed keeps the reference: weight_pull's rope
 # failed every cheaper setting, and the pure-JAX tasks have no physics.

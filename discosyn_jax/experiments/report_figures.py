@@ -9,7 +9,7 @@ import pathlib
 import numpy as np
 
 from discosyn_jax.run import layout, logs
-from experiments.report_runs import Run, order
+from discosyn_jax.experiments.report_runs import Run, order
 
 
 def curves(runs: list[Run], path: pathlib.Path, title: str, metric: str = "success") -> pathlib.Path:
@@ -104,7 +104,7 @@ def tsne(run: Run, path: pathlib.Path, make_trainer=None) -> pathlib.Path:
   import matplotlib.pyplot as plt
   from sklearn.manifold import TSNE
 
-  from experiments import record
+  from discosyn_jax.experiments import record
 
   samples = record.z_of(run.path, make_trainer)
   zs = [samples[task] for task in run.config.tasks]

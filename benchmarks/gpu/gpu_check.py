@@ -1,8 +1,8 @@
 """The prepared GPU check: one call on a bare device machine measures the GPU path end to end.
 
-  bash experiments/device/wheels.sh          # here, once: the wheels the device image lacks
+  bash benchmarks/gpu/wheels.sh          # here, once: the wheels the device image lacks
   # on the device (docs/SCALING.md has the exact call):
-  python3 experiments/device/gpu_check.py --methods DiscoSyn3-L-reward --budget-s 500 --out $OUT
+  python3 benchmarks/gpu/gpu_check.py --methods DiscoSyn3-L-reward --budget-s 500 --out $OUT
 
 Each result one JSON line in OUT/gpu_check.jsonl as soon as it is measured (a run cut
 short keeps what it measured); the methods (--methods: rows of the paper's tables,
@@ -17,7 +17,7 @@ scale takes minutes (docs/BENCHMARKS.md, "GPU"): give a call of 15 device-minute
   physics    (--physics, after the first method's start) MJX env (control) steps/s of the
              jitted, vmapped `HandEnv.step` in a scan of --physics-steps steps, for every task
              of the set at every --batches, and for valve3 at one batch under each of
-             experiments/physics_study.SETTINGS (compiled in parallel threads)
+             studies/physics_study.SETTINGS (compiled in parallel threads)
   train      one line per train step (env steps, wall seconds, env steps/s, training
              success), for the method's equal share of what is left of --budget-s
   eval       deterministic success and return per task every --eval-every train steps and at
@@ -40,15 +40,16 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
 import discosyn_jax  # noqa: E402
+from discosyn_jax.run import jax_setup  # noqa: E402
 
-discosyn_jax.setup_jax()  # the compile cache; MJX imported quietly
+jax_setup.setup_jax()  # the compile cache; MJX imported quietly
 
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
-import tasks  # noqa: E402
+from discosyn_jax import tasks  # noqa: E402
 from discosyn_jax.training import loop  # noqa: E402
-from experiments import paper, physics_study  # noqa: E402
+from discosyn_jax.experiments import paper, physics_study  # noqa: E402
 
 
 class Log:
@@ -91,7 +92,7 @@ def timed(fn):
 
 def physics_modules(names, batches, settings, steps: int):
   """[(label, lowered scan, its arguments)] for every task x batch, and valve3 at the largest
-  batch but one under each of `settings` (experiments/physics_study.py)."""
+  batch but one under each of `settings` (studies/physics_study.py)."""
   jobs = [(dict(task=name, batch=batch, setting="default"), tasks.make(name, backend="mjx"))
           for name in names for batch in batches]
   for setting in settings:
@@ -215,13 +216,13 @@ def train_method(log: Log, method: str, config, state, train_step, evaluate, sec
 def main(argv=None):
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument("--methods", nargs="+", default=["DiscoSyn3-L-reward", "Random3-L-zfree"],
-                      help="rows of the set's table (experiments/paper.py PAPER_ROWS): the "
+                      help="rows of the set's table (discosyn_jax/experiments/paper.py PAPER_ROWS): the "
                            "default row and its strongest control")
   parser.add_argument("--set", default="set1", choices=sorted(paper.TABLES.values()),
                       help="the task set (its table's rows)")
   parser.add_argument("--seed", type=int, default=0)
   parser.add_argument("--scale", default="gpu", choices=list(paper.SCALES),
-                      help="sizes of the training (experiments/paper.py SCALES)")
+                      help="sizes of the training (discosyn_jax/experiments/paper.py SCALES)")
   parser.add_argument("--backend", default="mjx", choices=["mjx", "native"],
                       help="physics of the training (native: a CPU dry run)")
   parser.add_argument("--physics", action="store_true",

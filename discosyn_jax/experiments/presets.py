@@ -2,7 +2,7 @@
 
 Each preset is a TrainConfig (discosyn_jax/config.py), so a typo in a field name fails at
 import, not in the middle of a run. The paper's runs (Tables I and II) are here by name,
-`<set>-disco<b>-<linear|mlp>` and `<set>-ppo`; experiments/paper.py runs them at a scale.
+`<set>-disco<b>-<linear|mlp>` and `<set>-ppo`; discosyn_jax/experiments/paper.py runs them at a scale.
 The linear DiscoSyn presets start every seed's decoder from the reward prior (one synergy
 space from every seed: set #1 5 seeds, set #2 3 seeds, docs/TRAINING_NOTES.md);
 `<set>-disco<b>-linear-reward`, `-prior` (the object-motion prior) and `-paper` (the paper's
@@ -12,7 +12,7 @@ random start) name each start on every set.
 from __future__ import annotations
 
 from discosyn_jax.config import TrainConfig
-from tasks import TASK_SETS
+from discosyn_jax.tasks import TASK_SETS
 
 # the size of a run on a CPU: a run of set1-disco3-linear took 55 min for 10 M env steps on 2 cores
 CPU_RUN = dict(num_envs=128, unroll_length=20, num_minibatches=8, update_epochs=4, steps=2000,

@@ -7,13 +7,13 @@
 
 import importlib
 
-from tasks.sets import TASK_SETS
+from discosyn_jax.tasks.sets import TASK_SETS
 
 __all__ = ["TASK_SETS"]  # and, loaded on first use, the registry's names
 
 
 def __getattr__(name: str):
-  registry = importlib.import_module("tasks.registry")  # (not `from tasks import`: it asks here)
+  registry = importlib.import_module("discosyn_jax.tasks.registry")  # (not `from discosyn_jax.tasks import`: it asks here)
   try:
     return getattr(registry, name)
   except AttributeError:

@@ -1,8 +1,8 @@
 """Why does the DiscoSyn decoder not learn? One variant of `set1-disco3-linear`
 (as it was before z was bounded, unless a variant says) per hypothesis, trained and summarised side by side.
 
-  python experiments/decoder_hypotheses.py --variants baseline squash --seeds 0 1 --steps 100
-  python experiments/decoder_hypotheses.py --summary runs/hypotheses      # the table only
+  python studies/decoder_hypotheses.py --variants baseline squash --seeds 0 1 --steps 100
+  python studies/decoder_hypotheses.py --summary runs/hypotheses      # the table only
 
 Each run goes to OUT/<variant>-seed<n> (an unfinished one is resumed, a finished one kept);
 the summary gives, per run, env steps, the final deterministic success per valve, and the
@@ -20,13 +20,14 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import discosyn_jax  # noqa: E402
+from discosyn_jax.run import jax_setup  # noqa: E402
 
-discosyn_jax.setup_jax()  # the compile cache; MJX imported quietly
+jax_setup.setup_jax()  # the compile cache; MJX imported quietly
 
 from discosyn_jax import config as config_lib  # noqa: E402
 from discosyn_jax.run import layout, logs, reading
 from discosyn_jax.training import loop  # noqa: E402
-from experiments import presets  # noqa: E402
+from discosyn_jax.experiments import presets  # noqa: E402
 
 # variant -> TrainConfig changes to set1-disco3-linear (one hypothesis each)
 VARIANTS = {

@@ -1,6 +1,6 @@
 """Turn valve3 to a goal angle (the sparse task of the paper's exploration experiment).
 
-Observation (30): the valve's (27, tasks/valve.py), then cos and sin of the goal angle and
+Observation (30): the valve's (27, discosyn_jax/tasks/valve.py), then cos and sin of the goal angle and
 the wrapped error goal - angle. Reward: 1 when |wrap(angle - goal)| < `threshold`, else 0
 (`dense=True`, the debugging twin: 1 - |error| / pi, the same maximum). Success: within
 the threshold in the episode's last state.
@@ -24,7 +24,7 @@ import jax.numpy as jnp
 
 from discosyn_jax.env.physics import PhysicsView
 from discosyn_jax.env.task import Info
-from tasks import common, valve
+from discosyn_jax.tasks import common, valve
 
 
 @dataclasses.dataclass(frozen=True)

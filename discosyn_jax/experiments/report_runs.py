@@ -12,10 +12,10 @@ from typing import Any
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import hands
 from discosyn_jax.run import layout, logs
-from experiments import record
-from experiments.presets import DECAY, PRIORED, REWARDED
-import tasks
-from tasks import TASK_SETS
+from discosyn_jax.experiments import record
+from discosyn_jax.experiments.presets import DECAY, PRIORED, REWARDED
+from discosyn_jax import tasks
+from discosyn_jax.tasks import TASK_SETS
 
 _DECAYED = f"-wd{DECAY['decoder_weight_decay']:g}a{DECAY['decoder_weight_decay_steps']}"
 METHOD_ORDER = ("PPO", "PCA4", "AE4", "PCA6", "AE6")
@@ -66,7 +66,7 @@ class Run:
 def action_size(task: str, hand: str) -> int:
   """The action size of `task` on `hand`: the hand's actuators, or a pure-JAX task's own
   (its env built once). A task no longer known (a file gone) counts as a hand's."""
-  import tasks.registry as registry
+  import discosyn_jax.tasks.registry as registry
 
   entry = registry.REGISTRY.get(task)
   if entry is not None and entry.env is not registry.HandEnv:

@@ -172,8 +172,7 @@ def bench_row(config, args) -> dict:
   """Every figure of one backend and batch: see the module docstring."""
   import jax
 
-  import tasks
-
+  from discosyn_jax import tasks
   trainer = tasks.trainer(config, devices=args.devices) if args.train else None
   envs = trainer.envs if trainer else tasks.make_envs(config)
   clock = CallbackClock(envs)
@@ -228,7 +227,7 @@ def bench_row(config, args) -> dict:
 def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.ArgumentParser:
   parser = parser or argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument("--preset", default="set1-disco3-linear",
-                      help="the training config, a name in experiments/presets.py (default: "
+                      help="the training config, a name in discosyn_jax/experiments/presets.py (default: "
                       "%(default)s)")
   parser.add_argument("--tasks", nargs="+", help="tasks or task sets (default: the preset's)")
   parser.add_argument("--backends", nargs="+", default=["native"], choices=["native", "mjx"],
@@ -255,8 +254,8 @@ def run(args) -> None:
   import jax
   import mujoco
 
-  import tasks
-  from experiments import presets
+  from discosyn_jax import tasks
+  from discosyn_jax.experiments import presets
 
   base = presets.preset(args.preset)
   if args.tasks:

@@ -38,7 +38,7 @@ import mujoco
 from discosyn_jax.env import hands
 from discosyn_jax.env.physics import PhysicsView
 from discosyn_jax.env.task import Info, Task, TaskConfig
-from tasks import common
+from discosyn_jax.tasks import common
 
 PALM_SURFACE_Z = 0.2361  # world height of the upturned palm's surface (hands.PALM_UP)
 GOAL_AXES = ("z", "any")  # the palm normal (world z, the hand palm up), or a random axis

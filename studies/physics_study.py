@@ -17,8 +17,8 @@ Every setting keeps the control step at 0.04 s. Per task and setting it prints
 The last lines say, per task, which settings stay within the tolerances (--tol-*), and the
 cheapest of them.
 
-  python -m experiments.physics_study --tasks set1 --episodes 128      # ~10 min on 2 cores
-  python -m experiments.physics_study --tasks valve3 --settings ref 8x5 --episodes 16 --repeats 1
+  python -m studies.physics_study --tasks set1 --episodes 128      # ~10 min on 2 cores
+  python -m studies.physics_study --tasks valve3 --settings ref 8x5 --episodes 16 --repeats 1
 """
 
 from __future__ import annotations
@@ -66,8 +66,7 @@ class Row:
 
 
 def make_env(name: str, setting: str, backend: str = "native"):
-  import tasks
-
+  from discosyn_jax import tasks
   return tasks.make(name, backend=backend, physics="reference", **SETTINGS[setting])
 
 
@@ -119,7 +118,7 @@ def fidelity(env, name: str, episodes: int, long_episodes: int, long_steps: int,
 
 def mjx_cost(name: str, setting: str, batch: int, steps: int) -> tuple[float, float]:
   """(compile s, env/s) of MJX's vmapped step scan (small on a CPU)."""
-  from experiments.bench import bench_inputs, physics_runner
+  from discosyn_jax.experiments.bench import bench_inputs, physics_runner
 
   env = make_env(name, setting, backend="mjx")
   run, compile_s = physics_runner([env], *bench_inputs([env], batch, steps))
@@ -130,7 +129,7 @@ def mjx_cost(name: str, setting: str, batch: int, steps: int) -> tuple[float, fl
 
 
 def study(names, settings, args) -> list[Row]:
-  from experiments.bench import RawRollout, bench_inputs, native_threads, physics_runner
+  from discosyn_jax.experiments.bench import RawRollout, bench_inputs, native_threads, physics_runner
 
   rows = {(n, s): Row(n, s) for n in names for s in settings}
   for name in names:
@@ -231,8 +230,7 @@ def main(argv=None):
 
   import jax
 
-  import tasks
-
+  from discosyn_jax import tasks
   names = tasks.expand(args.tasks)
   print(f"# jax {jax.__version__}, batch {args.batch} x {args.steps} steps, {args.repeats} repeats, "
         f"{args.episodes} episodes; {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}")

@@ -6,9 +6,9 @@ Per task and policy it prints: the success rate in the episode's last state (wha
 task's own progress measure (mean and max over episodes), peak hand joint speed, peak
 object speed and the deepest hand-object contact penetration.
 
-  python experiments/task_calibration.py --episodes 128
-  python experiments/task_calibration.py --tasks weight_pull --episodes 64 --policies scripted
-  python experiments/task_calibration.py --tasks valve3 --hand leap16   # another hand
+  python studies/task_calibration.py --episodes 128
+  python studies/task_calibration.py --tasks weight_pull --episodes 64 --policies scripted
+  python studies/task_calibration.py --tasks valve3 --hand leap16   # another hand
 """
 
 from __future__ import annotations
@@ -19,11 +19,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-import tasks
+from discosyn_jax import tasks
 from discosyn_jax.env import hands, scripted
 from discosyn_jax.env.physics.native import deepest_penetration
 from discosyn_jax.env.rollouts import run_episode
-from experiments import physics_study
+from studies import physics_study
 
 DEFAULT_TASKS = ("dice", "weight_pull", "screw", "valve_cylinder", "valve_cw", "screw_topdown", "valve_goal")
 

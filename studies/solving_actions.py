@@ -1,6 +1,6 @@
 """How much of a solving policy's actions each linear synergy space holds.
 
-  python experiments/solving_actions.py runs/paper --set set2
+  python studies/solving_actions.py runs/paper --set set2
 
 FOLDER is the runs of `discosyn experiment`: `discosyn keep` leaves the fits' actions.npz
 (1 MB a seed) out of its records, so a kept folder has none.

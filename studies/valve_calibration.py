@@ -5,7 +5,7 @@ For each valve and hinge setting, runs `--episodes` episodes of a uniform random
 random policy's success rate, mean |net turn|, peak hand joint speed, valve speed and the
 deepest hand-object contact penetration; then the scripted grasp-and-sweep turn.
 
-  python experiments/valve_calibration.py --frictionloss 0 0.15 --damping 0.1 0.5
+  python studies/valve_calibration.py --frictionloss 0 0.15 --damping 0.1 0.5
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-import tasks
+from discosyn_jax import tasks
 from discosyn_jax.env import hands, scripted
 from discosyn_jax.env.physics.native import deepest_penetration
 

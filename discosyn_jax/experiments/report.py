@@ -16,7 +16,7 @@ Writes OUT/REPORT.md and PNG figures beside it:
 "Solved" is: the mean over seeds of the final evaluation's success >= `threshold`.
 A run's method and set come from its experiment.json (written by `discosyn experiment`), or
 else from its config. It reads a run's record where its checkpoints are not kept
-(experiments/record.py). The text is the same wherever and whenever it is made from the
+(discosyn_jax/experiments/record.py). The text is the same wherever and whenever it is made from the
 same folders: no date, and the folders named relative to the report's own.
 """
 
@@ -31,11 +31,11 @@ from typing import Any
 import numpy as np
 
 from discosyn_jax.run import layout, logs
-from experiments import record, report_figures
-from experiments.presets import REWARDED
-from experiments.report_runs import Run, find, order
-import tasks
-from tasks import TASK_SETS
+from discosyn_jax.experiments import record, report_figures
+from discosyn_jax.experiments.presets import REWARDED
+from discosyn_jax.experiments.report_runs import Run, find, order
+from discosyn_jax import tasks
+from discosyn_jax.tasks import TASK_SETS
 
 # The paper's Tables I and II (1 = solved, columns in these tasks' order) and its PCA
 # explained variance on set #1.
@@ -350,7 +350,7 @@ def _write(runs, fits, paths, out: pathlib.Path, threshold: float, with_tsne: bo
               "set determines has a high overlap between seeds (learned, seed pairs) however "
               "low it was between their random starts (initial); a seed that only turned its "
               "own start keeps a high overlap with it. The planted span: the subspace the "
-              "planted tasks' targets lie in (tasks/planted.py). Cells: mean (min–max) [pairs "
+              "planted tasks' targets lie in (discosyn_jax/tasks/planted.py). Cells: mean (min–max) [pairs "
               "or seeds]; the learned subspaces are read from the runs' checkpoints, or their "
               "records' decoder.npz.", "", discovered]
     for task_set in sorted({r.task_set for r in main}):

@@ -7,7 +7,7 @@ valve's mean angular velocity over the control step and s = +1 for counter-clock
 from above), -1 for clockwise. Success: the net turn s * (angle_T - angle_0) reaches
 `success_turn`.
 
-Numbers, and why (measured with experiments/valve_calibration.py, see docs/TASKS_NOTES.md):
+Numbers, and why (measured with studies/valve_calibration.py, see docs/TASKS_NOTES.md):
 the hinge gets the frictionloss and damping of a hand-operated valve so that random
 flailing cannot spin it, and the rewarded speed is capped so that striking it is worth no
 more than turning it steadily. The wheel keeps the valves' hinge, threshold and reward.
@@ -26,7 +26,7 @@ import mujoco
 
 from discosyn_jax.env.physics import PhysicsView
 from discosyn_jax.env.task import Info, Task, TaskConfig
-from tasks import common
+from discosyn_jax.tasks import common
 
 SHAPES = ("arms", "wheel")
 

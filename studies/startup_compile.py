@@ -4,8 +4,8 @@ pool (none: on MJX the step then holds no `mjx.forward`). Each measurement runs 
 process with the compile cache off; the variants alternate, so a change of the machine's
 load hits both.
 
-  python -m experiments.startup_compile --tasks valve3 --backend mjx --repeats 2
-  python -m experiments.startup_compile --tasks valve2 valve3 --backend mjx --repeats 1
+  python -m studies.startup_compile --tasks valve3 --backend mjx --repeats 2
+  python -m studies.startup_compile --tasks valve2 valve3 --backend mjx --repeats 1
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ def measure(tasks: list[str], backend: str, pool: bool, num_envs: int) -> dict:
   import jax
 
   from discosyn_jax.config import TrainConfig
-  import tasks as registry
+  from discosyn_jax import tasks as registry
 
   config = TrainConfig(tasks=tuple(tasks), backend=backend, reset_pool=pool, num_envs=num_envs,
                        unroll_length=5, num_minibatches=2, update_epochs=1, steps=1)
@@ -56,7 +56,7 @@ def main(argv=None):
   print("| reset | build s | init s | train-step compile s |\n|---|---|---|---|")
   for _ in range(args.repeats):
     for variant in rows:
-      out = subprocess.run([sys.executable, "-m", "experiments.startup_compile", "--child", variant,
+      out = subprocess.run([sys.executable, "-m", "studies.startup_compile", "--child", variant,
                             "--backend", args.backend, "--num-envs", str(args.num_envs),
                             "--tasks", *args.tasks], env=env, capture_output=True, text=True,
                            check=True)

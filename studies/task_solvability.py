@@ -2,12 +2,12 @@
 seed, up to 10 M env steps, ended at the first evaluation at which its deterministic success
 reaches 80 % (`train --stop-at`); then the table of the curves.
 
-  python experiments/task_solvability.py --tasks dice weight_pull screw valve_cw --seeds 0 1
-  python experiments/task_solvability.py --summary runs/solvability      # the table only
+  python studies/task_solvability.py --tasks dice weight_pull screw valve_cw --seeds 0 1
+  python studies/task_solvability.py --summary runs/solvability      # the table only
 
 Each run goes to OUT/<task>-seed<n> (an unfinished one is resumed, a finished one kept), so
 two invocations with different tasks or seeds can share the two cores. The random policy's
-rates to put beside them: experiments/task_calibration.py. Results: docs/TASKS_NOTES.md.
+rates to put beside them: studies/task_calibration.py. Results: docs/TASKS_NOTES.md.
 """
 
 from __future__ import annotations
@@ -21,13 +21,14 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import discosyn_jax  # noqa: E402
+from discosyn_jax.run import jax_setup  # noqa: E402
 
-discosyn_jax.setup_jax()  # the compile cache; MJX imported quietly
+jax_setup.setup_jax()  # the compile cache; MJX imported quietly
 
 from discosyn_jax import config as config_lib  # noqa: E402
 from discosyn_jax.run import layout, logs, reading
 from discosyn_jax.training import loop  # noqa: E402
-from experiments import presets  # noqa: E402
+from discosyn_jax.experiments import presets  # noqa: E402
 
 TARGET = 0.8  # deterministic success that counts as learnt
 MAX_ENV_STEPS = 10_000_000

@@ -7,7 +7,7 @@
                          Random<b>-L-matched, the random subspace of that start carrying the
                          learned decoder's singular values, bias and noise (isolates the
                          subspace from its scale and offset; read from the DiscoSyn run)
-  discosyn-planted /     the same on the planted-synergy test bed (tasks/planted.py, b = 3):
+  discosyn-planted /     the same on the planted-synergy test bed (discosyn_jax/tasks/planted.py, b = 3):
     -planted_slack       one adequate subspace / many; not part of `all`. Also DiscoSyn3-L
                          with the annealed decoder weight decay (DiscoSyn3-L-wd8a200, the
                          `-decay` preset) and its Random3-L-matched-wd8a200 control
@@ -30,7 +30,7 @@
 
 Every step writes into its own folder of OUT (`<method>-<set>-seed<n>`). A step whose folder
 holds a finished run of the same config is kept, whether by its final checkpoint or by its
-record alone (experiments/record.py: what a run ends by writing, and what `discosyn keep`
+record alone (discosyn_jax/experiments/record.py: what a run ends by writing, and what `discosyn keep`
 copies to be committed); an unfinished one is resumed, so an interrupted `all` is continued
 by running it again, in a fresh clone from the committed records too. A later step reads
 the records of those before it (decoder.npz, a fit's synergy files); only a fit reads a
@@ -52,15 +52,15 @@ from typing import Any, Callable
 import jax
 import numpy as np
 
-import tasks
+from discosyn_jax import tasks
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import hands
 from discosyn_jax.run import layout
 from discosyn_jax.synergies import fitting
 from discosyn_jax.training import evaluation, loop
-from experiments import presets, record
+from discosyn_jax.experiments import presets, record
 
-# the task sets of tasks/sets.py, the unseen tasks split by the set whose synergies they take
+# the task sets of discosyn_jax/tasks/sets.py, the unseen tasks split by the set whose synergies they take
 TASK_SETS = {**{name: tasks.TASK_SETS[name] for name in ("set1", "set2", "sparse", "planted",
                                                          "planted_slack")},
              "unseen-set1": ("valve_cylinder", "valve_cw"), "unseen-set2": ("screw_topdown",)}
@@ -430,7 +430,7 @@ def run(experiment: str, out: pathlib.Path, scale: str, seeds=None, *,
   if decoder_from and experiment not in ("transfer", "sparse"):
     raise ValueError(f"a decoder can be given to transfer and sparse only, not to {experiment}")
   if make_trainer is None:
-    from tasks import trainer as make_trainer
+    from discosyn_jax.tasks import trainer as make_trainer
   out = pathlib.Path(out)
   if seeds is None:
     seeds = SCALES[scale].seeds if scale in SCALES else (0,)

@@ -12,4 +12,4 @@ export PYTHONPATH="/tmp/site:$PWD" PYTHONUNBUFFERED=1 DISCOSYN_JAX_CACHE="$PWD/r
 export XLA_FLAGS="${XLA_FLAGS:-} --xla_gpu_triton_gemm_any=true"
 OUT="${OUT:-runs/gpu_check}"
 mkdir -p "$OUT"
-python3 experiments/device/gpu_check.py --out "$OUT" "$@" 2>&1 | tee "$OUT/log.txt"
+python3 benchmarks/gpu/gpu_check.py --out "$OUT" "$@" 2>&1 | tee "$OUT/log.txt"

@@ -2,7 +2,7 @@
 so that a folder of records (docs/results/...) continues an experiment (`discosyn experiment
 NAME --out FOLDER` retrains none of the runs it holds) and regenerates its report.
 
-A Train step of experiments/paper.py ends by writing, beside config.json, eval.jsonl and
+A Train step of discosyn_jax/experiments/paper.py ends by writing, beside config.json, eval.jsonl and
 experiment.json:
   decoder.npz       the decoder at the end as a synergy file (fitting.save), runs with a
                     linear or mlp decoder: what a matched control and a frozen transfer
@@ -98,7 +98,7 @@ def z_of(run_dir: pathlib.Path, make_trainer: Callable | None = None) -> dict[st
   if path.is_file():
     with np.load(path) as data:
       return {task: data[task].astype(np.float32) for task in data.files}
-  import tasks
+  from discosyn_jax import tasks
   from discosyn_jax.training import loop
 
   trainer, state = loop.load_trained(run_dir, make_trainer or tasks.trainer)

@@ -3,7 +3,7 @@ under BEFORE against the file of the same path under AFTER, row by row and value
 the wall-clock fields aside (`wall_s`, `env_steps_per_s`: the only figures a rerun of a
 seeded command may change). The proof that a restructuring changed no behaviour:
 
-  python -m experiments.same_logs BEFORE AFTER     # exit 0: every file the same
+  python -m studies.same_logs BEFORE AFTER     # exit 0: every file the same
 """
 
 from __future__ import annotations
