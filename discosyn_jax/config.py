@@ -20,7 +20,7 @@ from discosyn_jax import atomic, checks
 
 DECODERS = ("linear", "mlp", "identity")
 # the priors a linear decoder may start from (decoder_init): what the pushed actions are read
-# by, and how the tasks' metrics make one subspace (discosyn_jax/synergies/physics_prior.py)
+# by, and how the tasks' metrics make one subspace (discosyn_jax/synergies/priors.py)
 PRIORS = {"physics": ("objects", "trace"), "reward": ("reward", "share")}
 DECODER_INITS = ("random", *PRIORS)
 # what q(.|a) reads back from an action: the head's z (the paper's), or the activation the
@@ -63,7 +63,7 @@ class TrainConfig:
   decoder_bias: bool = True  # linear decoder: a = W z + c rather than W z
   freeze_decoder: bool = False  # decoder parameters outside the optimiser
   # the start of a linear decoder: random (the paper's), or a prior, the same subspace for
-  # every seed, into which each seed's random decoder is turned (physics_prior.py): physics,
+  # every seed, into which each seed's random decoder is turned (priors.py): physics,
   # the actions that move the tasks' objects most, pooled; reward, the actions that change
   # what each task rewards, each task its share of the directions in turn
   decoder_init: str = "random"

@@ -27,13 +27,13 @@ import numpy as np
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from discosyn_jax.synergies import diagnostics, fitting, physics_prior  # noqa: E402
+from discosyn_jax.synergies import diagnostics, fitting, priors  # noqa: E402
 
 
 def variance_share(actions: np.ndarray, span: np.ndarray) -> float:
   """The share of the actions' variance (about their mean) inside span(span's columns)."""
   centred = actions - actions.mean(axis=0)
-  return physics_prior.captured(span, centred.T @ centred)
+  return priors.captured(span, centred.T @ centred)
 
 
 def linear_spans(folder: pathlib.Path, task_set: str, seed: int) -> dict[str, np.ndarray]:

@@ -119,9 +119,9 @@ def valve3_on_both_backends():
 @pytest.fixture(autouse=True)
 def _a_cheap_physics_prior(monkeypatch):
   """Runs that start from the physics prior (the quickstart's default) make it from 4
-  states per task here instead of 640 (test_physics_prior.py tests the prior itself; a
+  states per task here instead of 640 (test_priors.py tests the prior itself; a
   training in a subprocess makes the whole one)."""
-  from discosyn_jax.synergies import physics_prior
+  from discosyn_jax.synergies import priors
 
-  monkeypatch.setattr(physics_prior, "ENVS", 2)
-  monkeypatch.setattr(physics_prior, "EVERY", 50)
+  monkeypatch.setattr(priors, "ENVS", 2)
+  monkeypatch.setattr(priors, "EVERY", 50)

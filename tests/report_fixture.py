@@ -15,7 +15,7 @@ import tempfile
 import numpy as np
 import pytest
 
-from discosyn_jax.training.train import Trainer
+from discosyn_jax.training.trainer import Trainer
 from discosyn_jax.experiments import paper, presets, record, report
 from tests.toy_env import ReachAction
 

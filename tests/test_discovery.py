@@ -14,7 +14,7 @@ from discosyn_jax.agent import networks, ppo
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.run import checkpoints
 from discosyn_jax.synergies import diagnostics, discovery, fitting
-from discosyn_jax.training.train import Trainer
+from discosyn_jax.training.trainer import Trainer
 from discosyn_jax.experiments import paper, presets, report
 from discosyn_jax.tasks import planted
 from tests.toy_env import ReachAction

@@ -18,7 +18,7 @@ from discosyn_jax.config import TrainConfig
 from discosyn_jax.run import checkpoints, layout, logs, reading
 from discosyn_jax.synergies import fitting
 from discosyn_jax.training import loop
-from discosyn_jax.training.train import Trainer, _episode_metrics
+from discosyn_jax.training.trainer import Trainer, _episode_metrics
 from discosyn_jax.experiments import paper, presets, record, report, report_runs
 from tests import reference
 from tests.toy_env import ReachAction
@@ -38,7 +38,7 @@ def make_trainer(config):
 @pytest.fixture(scope="module", autouse=True)
 def paper_start():
   """The toy envs have no physics: the plans here start from the paper's random decoder
-  (the physics prior, the presets' start on the hand, is tested in test_physics_prior.py)."""
+  (the physics prior, the presets' start on the hand, is tested in test_priors.py)."""
   with pytest.MonkeyPatch.context() as patch:
     patch.setattr(presets, "PRESETS", {name: config.replace(decoder_init="random")
                                        if config.decoder == "linear" else config

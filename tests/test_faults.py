@@ -35,7 +35,7 @@ from discosyn_jax import atomic
 from discosyn_jax import config as config_lib
 from discosyn_jax.run import checkpoints, layout, logs, reading
 from discosyn_jax.training import loop
-from discosyn_jax.training.train import Trainer
+from discosyn_jax.training.trainer import Trainer
 from discosyn_jax.viz import videos
 from discosyn_jax.experiments import report_runs
 from tests.fault_worker import TOY, small_state, toy_envs

@@ -1,10 +1,10 @@
-"""train.gae: brax's GAE fed the rollout's ends, on hand-computed trajectories and against
+"""trainer.gae: brax's GAE fed the rollout's ends, on hand-computed trajectories and against
 the definition written out in NumPy (tests/reference.py)."""
 
 import numpy as np
 
 from discosyn_jax.config import TrainConfig
-from discosyn_jax.training.train import gae
+from discosyn_jax.training.trainer import gae
 from tests import reference
 
 

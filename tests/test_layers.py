@@ -94,7 +94,7 @@ def test_no_module_imports_itself_back():
 def test_the_walk_sees_the_imports_it_judges():
   edges = graph()  # the walk itself: a test that finds no import could never fail
   assert "discosyn_jax.run.checkpoints" in edges["discosyn_jax.training.loop"]
-  assert "discosyn_jax.training.train" in edges["discosyn_jax.tasks.registry"]  # inside a function
+  assert "discosyn_jax.training.trainer" in edges["discosyn_jax.tasks.registry"]  # inside a function
   assert TASKS in edges["discosyn_jax.experiments.presets"]
 
 

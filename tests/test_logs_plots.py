@@ -9,7 +9,7 @@ from PIL import Image
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.run import layout, logs
 from discosyn_jax.training import loop
-from discosyn_jax.training.train import Trainer
+from discosyn_jax.training.trainer import Trainer
 from discosyn_jax.viz import plots
 from tests.helpers import tensorboard_scalars
 from tests.toy_env import ReachAction

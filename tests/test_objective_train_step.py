@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from discosyn_jax.config import TrainConfig
-from discosyn_jax.training.train import Trainer
+from discosyn_jax.training.trainer import Trainer
 from tests import reference
 from tests.toy_env import StopOnSignal
 

@@ -11,7 +11,7 @@ from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import hands
 from discosyn_jax.run import checkpoints, layout
-from discosyn_jax.training.train import Trainer
+from discosyn_jax.training.trainer import Trainer
 from discosyn_jax.viz import synergy_pictures, videos
 
 # imageio reads a video back through an ffmpeg subprocess; JAX warns about any fork, here

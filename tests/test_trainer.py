@@ -9,7 +9,7 @@ import pytest
 from discosyn_jax.agent import networks, ppo
 from discosyn_jax.agent.networks import DiscoSyn
 from discosyn_jax.config import TrainConfig
-from discosyn_jax.training.train import Trainer, _episode_metrics
+from discosyn_jax.training.trainer import Trainer, _episode_metrics
 from tests.toy_env import ReachAction
 
 TARGET = np.linspace(-0.8, 0.8, 20)

@@ -16,7 +16,7 @@ from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import wrappers
 from discosyn_jax.run import checkpoints, owner, reading
 from discosyn_jax.training import loop
-from discosyn_jax.training.train import Trainer
+from discosyn_jax.training.trainer import Trainer
 from tests.toy_env import ReachAction
 
 TINY = dict(n_synergies=2, policy_hidden=(16, 16), value_hidden=(16, 16),

@@ -15,7 +15,7 @@ import numpy as np
 
 from discosyn_jax import tasks
 from discosyn_jax.config import TrainConfig
-from discosyn_jax.training.train import Trainer
+from discosyn_jax.training.trainer import Trainer
 from tests.test_trainer import two_task_trainer
 
 

@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-  from discosyn_jax.training.train import Trainer
+  from discosyn_jax.training.trainer import Trainer
 
 # JAX, MuJoCo and the trainer are imported where they are used: `discosyn --help` builds
 # this parser without them.

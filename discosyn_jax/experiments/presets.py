@@ -29,12 +29,12 @@ DECAYED = "-decay"
 # a preset to try, not a row of the tables
 DECAYED_SETS = ("planted", "planted_slack")
 # the object-motion prior: every seed's decoder starts in the subspace of the actions that
-# move the objects most (discosyn_jax/synergies/physics_prior.py); `<preset>-prior`, and
+# move the objects most (discosyn_jax/synergies/priors.py); `<preset>-prior`, and
 # `<preset>-paper` for the paper's random start
 PRIOR = dict(decoder_init="physics")
 PRIORED, PAPER = "-prior", "-paper"
 # the task-aware prior, the start of every linear DiscoSyn preset: the actions that change what
-# each task rewards, each task its share of the directions in turn (physics_prior.py); as
+# each task rewards, each task its share of the directions in turn (priors.py); as
 # good as the object-motion prior on set #1 (5 seeds) and set #2 (3 seeds), and it keeps what
 # a task rewards where other motion is larger; `<preset>-reward`
 REWARD = dict(decoder_init="reward")

@@ -222,6 +222,6 @@ def make_envs(config) -> list[Env]:
 
 def trainer(config, **kwargs):
   """A Trainer of `config` on its tasks' envs; `kwargs` go to Trainer (devices)."""
-  from discosyn_jax.training.train import Trainer
+  from discosyn_jax.training.trainer import Trainer
 
   return Trainer(config, make_envs(config), **kwargs)

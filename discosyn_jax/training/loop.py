@@ -24,9 +24,9 @@ from discosyn_jax import config as config_lib
 from discosyn_jax.agent import networks
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.run import checkpoints, layout, logs, owner, reading, stop
-from discosyn_jax.synergies import fitting, physics_prior
+from discosyn_jax.synergies import fitting, priors
 from discosyn_jax.training import evaluation
-from discosyn_jax.training.train import Trainer, TrainState
+from discosyn_jax.training.trainer import Trainer, TrainState
 from discosyn_jax.viz import plots
 
 
@@ -41,7 +41,7 @@ class WriteFailed(ValueError):
 
 def starting_decoder(trainer: Trainer) -> dict | None:
   """The decoder a fresh run starts from: its `decoder_from`, the physics prior's start
-  (physics_prior.py, computed once per trainer), or None (the Trainer's random one)."""
+  (priors.py, computed once per trainer), or None (the Trainer's random one)."""
   config = trainer.config
   if config.decoder_init in config_lib.PRIORS:
     return _prior_start(trainer)
@@ -54,8 +54,8 @@ def _prior_start(trainer: Trainer) -> dict | None:
   if config.n_synergies >= trainer.action_size:  # W spans every action: nothing to choose
     return None
   response, pooling = config_lib.PRIORS[config.decoder_init]
-  prior = physics_prior.basis(trainer.envs, config.n_synergies, response, pooling)
-  return physics_prior.start(networks.random_decoder(config, trainer.action_size), prior)
+  prior = priors.basis(trainer.envs, config.n_synergies, response, pooling)
+  return priors.start(networks.random_decoder(config, trainer.action_size), prior)
 
 
 def decoder_reference(trainer: Trainer, state: TrainState, log=print):
@@ -130,7 +130,7 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *,
   trainer = make_trainer(config)
   checks.memory(config, trainer.envs)
   if config.decoder_init in config_lib.PRIORS:
-    physics_prior.check(trainer.envs)
+    priors.check(trainer.envs)
   # Ctrl-C and SIGTERM stop it cleanly, from a script or a notebook as from the command
   with stop.handled(), owner.Writer(run_dir) as writer:
     # again, now that it is ours: another process may have made or replaced a run there

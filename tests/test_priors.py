@@ -1,4 +1,4 @@
-"""The priors (discosyn_jax/synergies/physics_prior.py): the action directions that move the
+"""The priors (discosyn_jax/synergies/priors.py): the action directions that move the
 objects most, or that change what each task rewards, the same for every seed; each seed's
 decoder starts in that subspace with its own scale and bias."""
 
@@ -8,7 +8,7 @@ import pytest
 from discosyn_jax import tasks
 from discosyn_jax import config as config_lib
 from discosyn_jax.agent import networks
-from discosyn_jax.synergies import diagnostics, fitting, physics_prior
+from discosyn_jax.synergies import diagnostics, fitting, priors
 from discosyn_jax.training import loop
 from discosyn_jax.experiments import presets
 
@@ -19,8 +19,8 @@ TINY = dict(num_envs=2, unroll_length=4, num_minibatches=2, update_epochs=1, ste
 @pytest.fixture(autouse=True)
 def few_states(monkeypatch):
   """4 random episodes per task, every 25th step: 16 states (the product uses 640)."""
-  monkeypatch.setattr(physics_prior, "ENVS", 4)
-  monkeypatch.setattr(physics_prior, "EVERY", 25)
+  monkeypatch.setattr(priors, "ENVS", 4)
+  monkeypatch.setattr(priors, "EVERY", 25)
 
 
 @pytest.fixture(scope="module")
@@ -29,13 +29,13 @@ def valve3():
 
 
 def test_the_prior_is_the_directions_that_move_the_object_most(valve3):
-  jac = physics_prior.jacobians(valve3, "objects")
+  jac = priors.jacobians(valve3, "objects")
   assert jac.shape == (16, 1, 20) and np.isfinite(jac).all()
   assert np.abs(jac).max() > 0  # some push moved the valve
-  basis = physics_prior.basis([valve3], 3)
+  basis = priors.basis([valve3], 3)
   assert basis.shape == (20, 3)
   np.testing.assert_allclose(basis.T @ basis, np.eye(3), atol=1e-6)
-  np.testing.assert_allclose(physics_prior.basis([valve3], 3), basis)  # no seed in it
+  np.testing.assert_allclose(priors.basis([valve3], 3), basis)  # no seed in it
   # the object moves more along each prior direction than along any direction outside it
   motion = lambda u: float(np.mean(np.sum((jac @ u) ** 2, axis=1)))
   outside = np.linalg.qr(np.eye(20) - basis @ basis.T)[0][:, :17]
@@ -43,11 +43,11 @@ def test_the_prior_is_the_directions_that_move_the_object_most(valve3):
 
 
 def test_a_start_keeps_the_seeds_own_scale_and_bias_in_the_prior_subspace(valve3):
-  basis = physics_prior.basis([valve3], 3)
+  basis = priors.basis([valve3], 3)
   config = presets.preset("set1-disco3-linear")
   for seed in (0, 1):
     own = networks.random_decoder(config.replace(seed=seed), 20)
-    start = physics_prior.start(own, basis)
+    start = priors.start(own, basis)
     kernel, own_kernel = start["synergies"]["kernel"], np.asarray(own["synergies"]["kernel"])
     assert diagnostics.overlap(kernel.T, basis) == pytest.approx(1.0, abs=1e-5)
     np.testing.assert_allclose(np.linalg.svd(kernel, compute_uv=False),
@@ -83,24 +83,24 @@ def test_the_prior_is_refused_where_it_cannot_start_the_decoder():
       config.replace(**bad).validate()
   assert config_lib.ADDED["decoder_init"] == "random" == config_lib.TrainConfig().decoder_init
   with pytest.raises(ValueError, match="needs hand tasks"):
-    physics_prior.basis([tasks.make("planted0")], 3)
+    priors.basis([tasks.make("planted0")], 3)
 
 
 def test_the_prior_of_an_mjx_env_is_measured_on_mujoco_c(valve3):
   """Whatever backend a run trains on, its prior is the reference physics' (and on the CPU):
   an MJX env gives its native twin's directions."""
   mjx_valve3 = tasks.make("valve3", backend="mjx")
-  assert physics_prior.reference(mjx_valve3).backend == "native"
-  assert physics_prior.reference(valve3) is valve3
-  np.testing.assert_array_equal(physics_prior.basis([mjx_valve3], 3),
-                                physics_prior.basis([valve3], 3))
+  assert priors.reference(mjx_valve3).backend == "native"
+  assert priors.reference(valve3) is valve3
+  np.testing.assert_array_equal(priors.basis([mjx_valve3], 3),
+                                priors.basis([valve3], 3))
 
 
 def test_chunking_the_pushes_changes_nothing(valve3, monkeypatch):
   """The pushes go through lax.map in chunks (MJX memory): chunking changes nothing."""
-  whole = physics_prior.jacobians(valve3, "objects")
-  monkeypatch.setattr(physics_prior, "CHUNK", 3)
-  np.testing.assert_allclose(physics_prior.jacobians(valve3, "objects"), whole, atol=1e-6)
+  whole = priors.jacobians(valve3, "objects")
+  monkeypatch.setattr(priors, "CHUNK", 3)
+  np.testing.assert_allclose(priors.jacobians(valve3, "objects"), whole, atol=1e-6)
 
 
 _PLANTED = """<mujoco><worldbody>
@@ -144,14 +144,14 @@ class PlantedResponse:
 
 def test_the_task_aware_prior_keeps_the_rewarded_direction_the_object_motion_prior_loses():
   env = PlantedResponse()
-  objects, reward = (physics_prior.basis([env], 1, response) for response in ("objects", "reward"))
+  objects, reward = (priors.basis([env], 1, response) for response in ("objects", "reward"))
   assert abs(objects[1, 0]) == pytest.approx(1.0, abs=1e-5)  # the flung object's action
   assert abs(reward[0, 0]) == pytest.approx(1.0, abs=1e-5)  # the task's own
-  assert physics_prior.captured(reward, physics_prior.metric(env, "reward")) == pytest.approx(1.0)
-  assert physics_prior.captured(objects, physics_prior.metric(env, "reward")) == pytest.approx(
+  assert priors.captured(reward, priors.metric(env, "reward")) == pytest.approx(1.0)
+  assert priors.captured(objects, priors.metric(env, "reward")) == pytest.approx(
       0.0, abs=1e-6)
   with pytest.raises(ValueError, match="response must be one of objects, reward"):
-    physics_prior.basis([env], 1, "velocity")
+    priors.basis([env], 1, "velocity")
 
 
 def test_sharing_gives_each_task_its_direction_where_the_pooled_sum_does_not():
@@ -161,14 +161,14 @@ def test_sharing_gives_each_task_its_direction_where_the_pooled_sum_does_not():
   m0 = np.diag([1 / 3, 1 / 3, 1 / 3, 0.0, 0.0])
   m1 = np.diag([0.0, 0.0, 0.0, 0.6, 0.4])
   m2 = np.diag([0.0, 0.0, 0.0, 0.4, 0.6])
-  pooled = physics_prior.pool([m0, m1, m2], 2, "trace")
-  shared = physics_prior.pool([m0, m1, m2], 2, "share")
-  assert physics_prior.captured(pooled, m0) == pytest.approx(0.0, abs=1e-9)
-  assert physics_prior.captured(shared, m0) == pytest.approx(1 / 3)
-  assert physics_prior.captured(shared, m1) == pytest.approx(0.6)
+  pooled = priors.pool([m0, m1, m2], 2, "trace")
+  shared = priors.pool([m0, m1, m2], 2, "share")
+  assert priors.captured(pooled, m0) == pytest.approx(0.0, abs=1e-9)
+  assert priors.captured(shared, m0) == pytest.approx(1 / 3)
+  assert priors.captured(shared, m1) == pytest.approx(0.6)
   np.testing.assert_allclose(shared.T @ shared, np.eye(2), atol=1e-9)
   with pytest.raises(ValueError, match="pooling must be one of trace, share"):
-    physics_prior.pool([m0], 1, "max")
+    priors.pool([m0], 1, "max")
 
 
 class PlantedGate(PlantedResponse):
@@ -184,11 +184,11 @@ class PlantedGate(PlantedResponse):
 
 
 def test_the_prior_read_at_a_policys_states_sees_what_only_that_policy_reaches(monkeypatch):
-  monkeypatch.setattr(physics_prior, "EVERY", 10)  # states at steps 0 and 10
+  monkeypatch.setattr(priors, "EVERY", 10)  # states at steps 0 and 10
   env = PlantedGate()
   import jax.numpy as jnp
   opener = lambda obs, key: jnp.broadcast_to(jnp.array([0.0, 1.0]), (obs.shape[0], 2))
-  random_states = physics_prior.basis([env], 1, "reward")
-  policy_states = physics_prior.basis([env], 1, "reward", acts=[opener])
+  random_states = priors.basis([env], 1, "reward")
+  policy_states = priors.basis([env], 1, "reward", acts=[opener])
   assert abs(random_states[1, 0]) == pytest.approx(1.0, abs=1e-5)  # before the gate: action 1
   assert abs(policy_states[0, 0]) == pytest.approx(1.0, abs=1e-5)  # past it: action 0
