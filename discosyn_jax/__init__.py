@@ -1,4 +1,20 @@
-"""DiscoSyn-JAX: hand synergies discovered with multi-task RL, in JAX."""
+"""DiscoSyn-JAX: hand synergies discovered with multi-task RL, in JAX.
+
+    import discosyn_jax as ds
+
+    config = ds.preset("quickstart").replace(seed=1)        # or ds.TrainConfig(...)
+    done = ds.train(config, "runs/mine", progress_fn=lambda steps, row: print(steps, row))
+    ds.evaluate("runs/mine")                  # {task: {"success": ..., "return": ...}}
+    ds.read_run("runs/mine").success          # each task's success at the last evaluation
+    env = ds.make_env("valve3")               # a Brax Env: reset / step, actions in [-1, 1]
+    ds.load_task("my_task.py:Slider")         # a task of one's own (docs/YOUR_TASK.md)
+
+The config: TrainConfig (its defaults are the recommended setup: a linear decoder of 3
+synergies started in the reward prior, z bounded, on task set #1), preset, PRESETS.
+Tasks: Task, TaskConfig, TASK_SETS, task_names, make_env, register_task, load_task.
+Runs: train, evaluate, read_run, Run. setup_jax: MJX imported quietly, the compile cache on.
+Every name loads on first use, so that `import discosyn_jax` itself imports no JAX.
+"""
 
 import os as _os
 import sys as _sys
@@ -24,3 +40,80 @@ def setup_jax() -> None:
   from discosyn_jax.run import jax_setup
 
   jax_setup.setup_jax()
+
+
+# name -> (module, attribute): loaded on first use (PEP 562), so that the command line's
+# --help and the presets answer without importing JAX
+_API = {
+    "TrainConfig": ("discosyn_jax.config", "TrainConfig"),
+    "preset": ("discosyn_jax.experiments.presets", "preset"),
+    "PRESETS": ("discosyn_jax.experiments.presets", "PRESETS"),
+    "Task": ("discosyn_jax.env.task", "Task"),
+    "TaskConfig": ("discosyn_jax.env.task", "TaskConfig"),
+    "TASK_SETS": ("discosyn_jax.tasks.sets", "TASK_SETS"),
+    "task_names": ("discosyn_jax.tasks.registry", "names"),
+    "make_env": ("discosyn_jax.tasks.registry", "make"),
+    "register_task": ("discosyn_jax.tasks.registry", "register"),
+    "load_task": ("discosyn_jax.tasks.registry", "load"),
+    "train": ("discosyn_jax.api", "train"),
+    "evaluate": ("discosyn_jax.api", "evaluate"),
+    "read_run": ("discosyn_jax.api", "read_run"),
+    "Run": ("discosyn_jax.api", "Run"),
+}
+__all__ = [*_API, "setup_jax"]
+
+
+def __getattr__(name: str):
+  if name not in _API:
+    raise AttributeError(f"module 'discosyn_jax' has no attribute {name!r}")
+  import importlib
+
+  module, attribute = _API[name]
+  value = getattr(importlib.import_module(module), attribute)
+  globals()[name] = value  # once
+  return value
+
+
+def __dir__():
+  return sorted(set(globals()) | set(__all__))
+
+
+# Import paths that moved, kept for one release: the old one still imports, with one
+# warning naming the new one (a task file written for an older release keeps working).
+_MOVED = {
+    "discosyn_jax.task": "discosyn_jax.env.task",
+    "discosyn_jax.hands": "discosyn_jax.env.hands",
+    "discosyn_jax.scene": "discosyn_jax.env.scene",
+    "discosyn_jax.synergies.physics_prior": "discosyn_jax.synergies.priors",
+    "discosyn_jax.training.train": "discosyn_jax.training.trainer",
+}
+
+
+class _MovedFinder:
+  """sys.meta_path's finder of the old paths: the old name becomes the new module."""
+
+  @staticmethod
+  def find_spec(name, path=None, target=None):
+    if name not in _MOVED:
+      return None
+    import importlib.util
+
+    return importlib.util.spec_from_loader(name, _MovedFinder)
+
+  @staticmethod
+  def create_module(spec):
+    import importlib
+    import warnings
+
+    new = _MOVED[spec.name]
+    warnings.warn(f"{spec.name} has moved to {new}; the old path goes in the next release",
+                  FutureWarning, stacklevel=2)
+    return importlib.import_module(new)
+
+  @staticmethod
+  def exec_module(module):
+    pass
+
+
+if not any(finder is _MovedFinder for finder in _sys.meta_path):
+  _sys.meta_path.append(_MovedFinder)

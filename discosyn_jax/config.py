@@ -22,7 +22,7 @@ DECODERS = ("linear", "mlp", "identity")
 # the priors a linear decoder may start from (decoder_init): what the pushed actions are read
 # by, and how the tasks' metrics make one subspace (discosyn_jax/synergies/priors.py)
 PRIORS = {"physics": ("objects", "trace"), "reward": ("reward", "share")}
-DECODER_INITS = ("random", *PRIORS)
+DECODER_INITS = ("auto", "random", *PRIORS)
 # what q(.|a) reads back from an action: the head's z (the paper's), or the activation the
 # decoder read, tanh(z) where z is bounded (the same as z where it is not)
 DISCRIMINATOR_TARGETS = ("z", "activation")
@@ -65,16 +65,19 @@ class TrainConfig:
   # the start of a linear decoder: random (the paper's), or a prior, the same subspace for
   # every seed, into which each seed's random decoder is turned (priors.py): physics,
   # the actions that move the tasks' objects most, pooled; reward, the actions that change
-  # what each task rewards, each task its share of the directions in turn
-  decoder_init: str = "random"
+  # what each task rewards, each task its share of the directions in turn; auto: reward for
+  # a linear decoder learned from scratch, random for any other (the config holds the start
+  # it resolved to, so a run's config.json names it)
+  decoder_init: str = "auto"
   # the initial decoder: a run directory (its latest checkpoint's decoder) or a synergy file
   # written by discosyn_jax.synergies.fitting (PCA / autoencoder); "" starts from a random one
   decoder_from: str = ""
   # False: a = the decoder's mean during training too (the sequential baselines' fixed spaces)
   decoder_noise: bool = True
   # the decoder reads tanh(z): synergy activations bounded to [-1, 1], so that the heads
-  # cannot make up for any decoder by driving z far out (a hypothesis, docs/TRAINING_NOTES.md)
-  squash_z: bool = False
+  # cannot make up for any decoder by driving z far out (with z free a random decoder did as
+  # well, docs/TRAINING_NOTES.md); the identity decoder (full-action PPO) reads z as it is
+  squash_z: bool = True
   # what the discriminator q(.|a) reads back from the action: z, the head's sample (the
   # paper's), or activation, what the decoder read (tanh z where z is bounded: a z deep in
   # tanh's saturation cannot be read back, and its bonus pays the heads for narrowing z)
@@ -138,6 +141,12 @@ class TrainConfig:
   eval_envs: int = 32  # episodes per task in an evaluation
   checkpoint_every: int = 50  # train steps between checkpoints (0: only the final one)
   keep_checkpoints: int = 3  # periodic checkpoints kept besides `final`
+
+  def __post_init__(self):
+    if self.decoder_init == "auto":  # resolved once: the config says the start it runs
+      learned_from_scratch = (self.decoder == "linear" and not self.decoder_from
+                              and not self.freeze_decoder)
+      object.__setattr__(self, "decoder_init", "reward" if learned_from_scratch else "random")
 
   @property
   def env_steps_per_train_step(self) -> int:

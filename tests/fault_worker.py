@@ -52,7 +52,7 @@ from discosyn_jax.config import TrainConfig  # noqa: E402
 from discosyn_jax.run import checkpoints  # noqa: E402
 from tests.toy_env import ReachAction  # noqa: E402
 
-TOY = TrainConfig(tasks=("valve1",), n_synergies=2, policy_hidden=(8,), value_hidden=(8,),
+TOY = TrainConfig(squash_z=False, decoder_init="random", tasks=("valve1",), n_synergies=2, policy_hidden=(8,), value_hidden=(8,),
                   discriminator_hidden=(8,), num_envs=4, unroll_length=5, num_minibatches=2,
                   update_epochs=1, steps=6, eval_every=1, eval_envs=2, checkpoint_every=2,
                   keep_checkpoints=2, backend="native")

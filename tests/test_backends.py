@@ -89,7 +89,7 @@ def test_the_mjx_implementation_is_chosen_by_name_and_checked(monkeypatch):
 def test_mjx_trainer_inits_and_trains_one_step():
   # `init` once ran MJX op by op (minutes per reset); it must be one jitted function, so this
   # test, at 2 envs, takes about as long as compiling the step
-  config = TrainConfig(tasks=("valve0",), n_synergies=3, decoder="linear", num_envs=2,
+  config = TrainConfig(squash_z=False, decoder_init="random", tasks=("valve0",), n_synergies=3, decoder="linear", num_envs=2,
                        unroll_length=2, num_minibatches=1, update_epochs=1, steps=1,
                        eval_every=0, eval_envs=2, checkpoint_every=0, backend="mjx")
   trainer = tasks.trainer(config)

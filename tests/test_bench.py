@@ -28,7 +28,7 @@ def test_the_raw_limit_replays_the_envs_own_states_and_controls():
   from discosyn_jax.config import TrainConfig
   from discosyn_jax.experiments.bench import RawRollout, bench_inputs, physics_runner
 
-  envs = tasks.make_envs(TrainConfig(tasks=("valve1", "valve3"), backend="native"))
+  envs = tasks.make_envs(TrainConfig(squash_z=False, decoder_init="random", tasks=("valve1", "valve3"), backend="native"))
   states, actions = bench_inputs(envs, 4, 5)
   run, _ = physics_runner(envs, states, actions)
   for env, state, final in zip(envs, states, run()):

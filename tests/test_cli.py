@@ -78,7 +78,7 @@ def test_bad_input_is_one_line_and_exit_2():
 def test_a_finished_run_ends_with_the_next_commands_filled_in(tmp_path):
   from discosyn_jax.config import TrainConfig
 
-  config = TrainConfig(tasks=("valve0", "valve3"), steps=40)
+  config = TrainConfig(squash_z=False, decoder_init="random", tasks=("valve0", "valve3"), steps=40)
   results = {"valve0": {"success": 0.9, "return": 1.0}, "valve3": {"success": 0.2, "return": 0.0}}
   text = commands.next_commands(tmp_path / "my run", 40, config, results)
   run = f"'{tmp_path / 'my run'}'"  # quoted: a folder name with a space still pastes
@@ -121,7 +121,7 @@ def test_a_task_posture_without_a_decoder_is_one_line_and_nothing_made(tmp_path,
 
 @pytest.mark.parametrize("argv, line", [
     (["train", "--decoder-init", "bogus"], "discosyn train: error: argument --decoder-init: "
-     "invalid choice: 'bogus' (choose from 'random', 'physics', 'reward')"),
+     "invalid choice: 'bogus' (choose from 'auto', 'random', 'physics', 'reward')"),
     (["train", "--discriminator-target", "a"], "discosyn train: error: argument "
      "--discriminator-target: invalid choice: 'a' (choose from 'z', 'activation')"),
     (["train", "--steps", "x"], "discosyn train: error: argument --steps: invalid int value: 'x'"),

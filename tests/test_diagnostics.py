@@ -13,7 +13,7 @@ from discosyn_jax.synergies import diagnostics
 
 
 def model_and_params(decoder: str, seed: int = 0):
-  config = TrainConfig(tasks=("a",), n_synergies=3, decoder=decoder)
+  config = TrainConfig(squash_z=False, decoder_init="random", tasks=("a",), n_synergies=3, decoder=decoder)
   model = networks.build(config, (5,), 20)
   return model, model.init(jax.random.PRNGKey(seed), [jnp.zeros((1, 5))])
 

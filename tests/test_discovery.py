@@ -101,7 +101,7 @@ def test_a_decoder_trained_on_planted_tasks_finds_the_span():
   """The paper's update on one planted task that needs the whole span: the decoder's
   overlap with it climbs from chance to near 1 (96 k env steps, a few seconds after the
   compile; measured 2026-12-02: 0.11 at the start, 0.94 at the end)."""
-  config = TrainConfig(tasks=("planted0",), n_synergies=3, squash_z=True, num_envs=32,
+  config = TrainConfig(decoder_init="random", tasks=("planted0",), n_synergies=3, squash_z=True, num_envs=32,
                        unroll_length=10, num_minibatches=2, update_epochs=4, learning_rate=1e-3,
                        policy_hidden=(32, 32), value_hidden=(32, 32),
                        discriminator_hidden=(32, 32), steps=300)
@@ -118,7 +118,7 @@ def test_a_decoder_trained_on_planted_tasks_finds_the_span():
 
 
 def test_the_decoder_weight_decay_shrinks_the_decoder_weights_only():
-  config = TrainConfig(tasks=("a",), n_synergies=3)
+  config = TrainConfig(squash_z=False, decoder_init="random", tasks=("a",), n_synergies=3)
   params = make_trainer(config).initial_params()
   zero = jax.tree.map(jnp.zeros_like, params)
   plain = ppo.optimizer(config)
@@ -147,7 +147,7 @@ def test_the_decoder_weight_decay_shrinks_the_decoder_weights_only():
 # -- the initial decoder, rebuilt -------------------------------------------------------
 @pytest.mark.parametrize("decoder", ["linear", "mlp"])
 def test_the_initial_decoder_is_rebuilt_from_the_config_alone(decoder):
-  config = TrainConfig(tasks=("a", "b"), n_synergies=3, decoder=decoder, seed=7,
+  config = TrainConfig(squash_z=False, decoder_init="random", tasks=("a", "b"), n_synergies=3, decoder=decoder, seed=7,
                        decoder_hidden=(16, 16))
   from_trainer = make_trainer(config).initial_params()["params"]["synergy_decoder"]
   rebuilt = networks.random_decoder(config, 20)
@@ -208,7 +208,7 @@ def test_the_controls_build_run_and_show_in_the_report(tmp_path):
 
 
 def test_an_annealed_decay_falls_linearly_to_nothing_over_its_train_steps():
-  config = TrainConfig(tasks=("a",), n_synergies=3, num_minibatches=2, update_epochs=2,
+  config = TrainConfig(squash_z=False, decoder_init="random", tasks=("a",), n_synergies=3, num_minibatches=2, update_epochs=2,
                        decoder_weight_decay=2.0, decoder_weight_decay_steps=3)
   params = make_trainer(config).initial_params()
   zero = jax.tree.map(jnp.zeros_like, params)

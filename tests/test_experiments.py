@@ -113,7 +113,7 @@ def test_synergy_file_round_trip_and_mismatch(tmp_path):
   meta, loaded = fitting.read(path)
   assert meta["method"] == "PCA" and meta["explained_variance"] == pytest.approx(ev)
   np.testing.assert_array_equal(loaded["synergies"]["kernel"], params["synergies"]["kernel"])
-  config = TrainConfig(tasks=("a",), n_synergies=4, decoder_from=str(path), freeze_decoder=True)
+  config = TrainConfig(squash_z=False, decoder_init="random", tasks=("a",), n_synergies=4, decoder_from=str(path), freeze_decoder=True)
   assert fitting.load_decoder(path, config)["log_std"].shape == (20,)
   with pytest.raises(ValueError, match="n_synergies = 4, the config asks for 3"):
     fitting.load_decoder(path, config.replace(n_synergies=3))
@@ -135,7 +135,7 @@ def test_first_reward_step_is_logged():
 
 
 def test_noiseless_decoder_acts_with_its_mean():
-  config = TrainConfig(tasks=("a",), n_synergies=3, decoder_noise=False, alpha3=0.0,
+  config = TrainConfig(squash_z=False, decoder_init="random", tasks=("a",), n_synergies=3, decoder_noise=False, alpha3=0.0,
                        num_envs=4, unroll_length=5, num_minibatches=2)
   trainer = make_trainer(config)
   state = trainer.init()
@@ -289,7 +289,7 @@ def write_logs(run, config, meta, evals) -> None:
 def test_report_mean_and_spread_over_seeds(tmp_path, method):
   valves = ("valve0", "valve1", "valve2", "valve3")
   for seed, success in ((0, 1.0), (1, 0.5)):
-    config = TrainConfig(tasks=valves, seed=seed)
+    config = TrainConfig(squash_z=False, decoder_init="random", tasks=valves, seed=seed)
     # seed 0 fails valve3 in part: its mean over the four valves is 0.9, seed 1's 0.5; seed
     # 0 had nothing at its first evaluation (over the curve: 0.45), seed 1 stopped before
     # its last step (logs without a checkpoint: unfinished)
@@ -323,7 +323,7 @@ def test_each_discosyn_row_stands_above_its_controls_todays_default_first():
 
 
 def test_transfer_is_judged_over_the_curve_and_by_the_steps_to_the_threshold(tmp_path):
-  config = TrainConfig(tasks=("valve_cw",), num_envs=8, unroll_length=5, steps=30)
+  config = TrainConfig(squash_z=False, decoder_init="random", tasks=("valve_cw",), num_envs=8, unroll_length=5, steps=30)
   curves = {0: [0.2, 0.9, 1.0], 1: [0.5, 0.6, 0.85], 2: [0.0, 0.1, 0.3]}  # at steps 10, 20, 30
   for seed, success in curves.items():
     write_logs(tmp_path / f"seed{seed}", config.replace(seed=seed),
@@ -547,9 +547,9 @@ def test_cli_rejects_bad_input(tmp_path, capsys):
 
 
 def test_a_set_of_ones_own_tasks_is_named_by_its_classes_and_its_figures_link_as_they_are():
-  own = TrainConfig(tasks=("docs/examples/own_set/own_set.py:Press",
+  own = TrainConfig(squash_z=False, decoder_init="random", tasks=("docs/examples/own_set/own_set.py:Press",
                            "docs/examples/own_set/own_set.py:Rake"))
   assert report_runs._set_of(own) == "Press+Rake"
-  assert report_runs._set_of(TrainConfig(tasks=("valve0", "valve1", "valve2", "valve3"))) == "set1"
+  assert report_runs._set_of(TrainConfig(squash_z=False, decoder_init="random", tasks=("valve0", "valve1", "valve2", "valve3"))) == "set1"
   assert report.figure_name("curves", "Press+Rake") == "curves-Press_Rake.png"
   assert report.figure_name("overlap", "set1 on leap16") == "overlap-set1_on_leap16.png"

@@ -16,7 +16,7 @@ def test_termination_and_truncation_by_hand():
   """gamma 0.5, lambda 1: the episode terminates after step 1 and is cut by the time
   limit at step 3. Targets are the discounted returns within each episode; the truncated
   step is left out (advantage 0, target its own value) and step 2 bootstraps from it."""
-  config = TrainConfig(discount=0.5, gae_lambda=1.0)
+  config = TrainConfig(squash_z=False, decoder_init="random", discount=0.5, gae_lambda=1.0)
   target, advantage = gae(reward=column(1, 2, 3, 4), value=column(10, 20, 30, 40),
                           bootstrap=np.array([50.0], np.float32), done=column(0, 1, 0, 1),
                           truncation=column(0, 0, 0, 1), config=config)
@@ -27,7 +27,7 @@ def test_termination_and_truncation_by_hand():
 def test_lambda_zero_by_hand():
   """gamma 0.5, lambda 0, no ends: targets are one-step TD targets; brax's advantage is
   r_t + gamma target_{t+1} - v_t (not the TD error)."""
-  config = TrainConfig(discount=0.5, gae_lambda=0.0)
+  config = TrainConfig(squash_z=False, decoder_init="random", discount=0.5, gae_lambda=0.0)
   zeros = column(0, 0, 0)
   target, advantage = gae(reward=column(1, 1, 1), value=column(2, 4, 6),
                           bootstrap=np.array([8.0], np.float32), done=zeros, truncation=zeros,
@@ -44,7 +44,7 @@ def test_random_rollout_matches_the_definition():
   assert 0 < truncation.sum() < done.sum()
   reward, value = rng.normal(size=(2, T, B)).astype(np.float32)
   bootstrap = rng.normal(size=B).astype(np.float32)
-  config = TrainConfig(discount=0.9, gae_lambda=0.8)
+  config = TrainConfig(squash_z=False, decoder_init="random", discount=0.9, gae_lambda=0.8)
   got = gae(reward, value, bootstrap, done, truncation, config)
   want = reference.gae(reward, value, bootstrap, done * (1 - truncation), truncation, 0.9, 0.8)
   np.testing.assert_allclose(got[0], want[0], rtol=1e-5, atol=1e-5)

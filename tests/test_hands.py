@@ -185,7 +185,7 @@ def test_a_wrong_hand_name_or_palm_site_is_refused(tmp_path, spec, message):
 def test_the_run_config_keeps_the_hand_and_old_configs_had_ours():
   assert config_lib.ADDED["hand"] == "shadow20" == config_lib.TrainConfig().hand
   with pytest.raises(ValueError, match="no hand given"):
-    config_lib.TrainConfig(hand="").validate()
+    config_lib.TrainConfig(squash_z=False, decoder_init="random", hand="").validate()
 
 
 def test_an_experiment_on_another_hand_names_its_folders_and_configs_after_it(tmp_path):

@@ -14,7 +14,7 @@ from discosyn_jax.viz import plots
 from tests.helpers import tensorboard_scalars
 from tests.toy_env import ReachAction
 
-TOY = TrainConfig(tasks=("reach_a", "reach_b"), n_synergies=2, policy_hidden=(8,), value_hidden=(8,),
+TOY = TrainConfig(squash_z=False, decoder_init="random", tasks=("reach_a", "reach_b"), n_synergies=2, policy_hidden=(8,), value_hidden=(8,),
                   discriminator_hidden=(8,), num_envs=4, unroll_length=5, num_minibatches=2,
                   update_epochs=1, steps=4, eval_every=2, eval_envs=2, checkpoint_every=0)
 

@@ -13,7 +13,7 @@ from tests import reference
 from tests.toy_env import StopOnSignal
 
 TARGET = np.linspace(-0.8, 0.8, 20)
-CONFIG = TrainConfig(tasks=("a",), n_synergies=3, policy_hidden=(16, 16), value_hidden=(16, 16),
+CONFIG = TrainConfig(squash_z=False, decoder_init="random", tasks=("a",), n_synergies=3, policy_hidden=(16, 16), value_hidden=(16, 16),
                      discriminator_hidden=(16, 16), num_envs=8, unroll_length=6,
                      num_minibatches=2, update_epochs=1, alpha2=0.3, reward_scaling=0.5,
                      discount=0.9, gae_lambda=0.8, learning_rate=1e-2)

@@ -18,7 +18,7 @@ from discosyn_jax.viz import synergy_pictures, videos
 # harmlessly (exec follows). videos.write_video silences it for its own writer.
 pytestmark = pytest.mark.filterwarnings("ignore:os.fork:RuntimeWarning")
 
-TINY = TrainConfig(tasks=("valve1",), n_synergies=2, policy_hidden=(16,), value_hidden=(16,),
+TINY = TrainConfig(squash_z=False, decoder_init="random", tasks=("valve1",), n_synergies=2, policy_hidden=(16,), value_hidden=(16,),
                    discriminator_hidden=(16,), decoder_hidden=(16,), num_envs=2, unroll_length=4,
                    num_minibatches=2, update_epochs=1, eval_envs=2, backend="native")
 

@@ -16,7 +16,7 @@ from tests import reference
 
 OBS_SIZES = (3, 5)
 HIDDEN = dict(policy_hidden=(16, 16), value_hidden=(16, 16), decoder_hidden=(16, 16),
-              discriminator_hidden=(16, 16))
+              discriminator_hidden=(16, 16), squash_z=False, decoder_init="random")
 ALPHAS = dict(alpha1=0.05, alpha2=0.1, alpha3=0.07)
 NO_ENTROPY = dict(alpha1=0.0, alpha3=0.0)
 

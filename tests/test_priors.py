@@ -81,7 +81,18 @@ def test_the_prior_is_refused_where_it_cannot_start_the_decoder():
   for bad in (dict(decoder="mlp"), dict(decoder_from="x.npz"), dict(decoder_init="pca")):
     with pytest.raises(ValueError):
       config.replace(**bad).validate()
-  assert config_lib.ADDED["decoder_init"] == "random" == config_lib.TrainConfig().decoder_init
+  assert config_lib.ADDED["decoder_init"] == "random"  # what runs of older releases ran
+  # TrainConfig's own default is the recommended start, resolved when the config is made
+  # (auto: the reward prior for a linear decoder learned from scratch, else random)
+  assert config_lib.TrainConfig().decoder_init == "reward"
+  assert config_lib.TrainConfig().squash_z
+  for other in (dict(decoder="mlp"), dict(decoder="identity", n_synergies=20, alpha2=0.0,
+                                          alpha3=0.0), dict(freeze_decoder=True),
+                dict(decoder_from="x.npz")):
+    assert config_lib.TrainConfig(**other).decoder_init == "random", other
+  assert config_lib.TrainConfig(decoder_init="physics").decoder_init == "physics"
+  saved = config_lib.TrainConfig().to_dict()  # a config file names the start it ran
+  assert saved["decoder_init"] == "reward" and config_lib.TrainConfig.from_dict(saved).validate()
   with pytest.raises(ValueError, match="needs hand tasks"):
     priors.basis([tasks.make("planted0")], 3)
 

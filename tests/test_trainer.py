@@ -15,7 +15,7 @@ from tests.toy_env import ReachAction
 TARGET = np.linspace(-0.8, 0.8, 20)
 SMALL = dict(policy_hidden=(32, 32), value_hidden=(32, 32), decoder_hidden=(32, 32),
              discriminator_hidden=(32, 32), num_envs=32, unroll_length=10, num_minibatches=4,
-             update_epochs=4, learning_rate=1e-2, eval_envs=8)
+             update_epochs=4, learning_rate=1e-2, eval_envs=8, squash_z=False, decoder_init="random")
 PPO = dict(decoder="identity", n_synergies=20, alpha2=0.0, alpha3=0.0, init_z_std=0.5)
 
 
@@ -35,7 +35,7 @@ def random_samples(key, obs_size, n=16, b=3):
 @pytest.mark.parametrize("decoder", ["linear", "mlp", "identity"])
 def test_module_shapes(decoder):
   b = 20 if decoder == "identity" else 3
-  config = TrainConfig(**PPO) if decoder == "identity" else TrainConfig(decoder=decoder, n_synergies=b)
+  config = TrainConfig(**PPO) if decoder == "identity" else TrainConfig(squash_z=False, decoder_init="random", decoder=decoder, n_synergies=b)
   model = networks.build(config, obs_sizes=(7, 11), action_size=20)
   params = model.init(jax.random.PRNGKey(0), [jnp.zeros((1, 7)), jnp.zeros((1, 11))])
   for task, size in enumerate((7, 11)):
@@ -148,7 +148,7 @@ def test_a_given_decoder_is_installed_and_a_misfit_refused():
 
 
 def test_a_task_posture_moves_only_its_own_tasks_actions():
-  model = networks.build(TrainConfig(n_synergies=3, task_posture=True), obs_sizes=(7, 11),
+  model = networks.build(TrainConfig(squash_z=False, decoder_init="random", n_synergies=3, task_posture=True), obs_sizes=(7, 11),
                          action_size=20)
   params = model.init(jax.random.PRNGKey(0), [jnp.zeros((1, 7)), jnp.zeros((1, 11))])
   assert params["params"]["postures"].shape == (2, 20)
@@ -178,7 +178,7 @@ def test_task_postures_reach_what_one_frozen_synergy_cannot(posture):
 def _fitted_log_q(target: str, spread: float) -> float:
   """The mean log q of a discriminator fitted (300 Adam steps) to bounded synergies: z of
   std `spread`, decoded as a = tanh(z) W + noise."""
-  model = networks.build(TrainConfig(n_synergies=3, squash_z=True, discriminator_target=target),
+  model = networks.build(TrainConfig(decoder_init="random", n_synergies=3, squash_z=True, discriminator_target=target),
                          obs_sizes=(3,), action_size=20)
   params = model.init(jax.random.PRNGKey(0), [jnp.zeros((1, 3))])
   k1, k2, k3 = jax.random.split(jax.random.PRNGKey(1), 3)
@@ -211,7 +211,7 @@ def test_the_discriminator_reads_back_the_activation_where_z_saturates():
 
 
 def test_discriminator_likelihood_rises_on_a_fixed_batch():
-  model = networks.build(TrainConfig(n_synergies=3), obs_sizes=(3,), action_size=20)
+  model = networks.build(TrainConfig(squash_z=False, decoder_init="random", n_synergies=3), obs_sizes=(3,), action_size=20)
   params = model.init(jax.random.PRNGKey(0), [jnp.zeros((1, 3))])
   k1, k2, k3 = jax.random.split(jax.random.PRNGKey(1), 3)
   z = jax.random.normal(k1, (256, 3))
@@ -260,16 +260,16 @@ def test_episode_metrics_average_over_the_episodes_that_ended():
 
 def test_config_rejects_impossible_settings():
   with pytest.raises(ValueError, match="between 1 and 20"):
-    TrainConfig(n_synergies=0).validate()
+    TrainConfig(squash_z=False, decoder_init="random", n_synergies=0).validate()
   with pytest.raises(ValueError, match="between 1 and 20"):
-    TrainConfig(n_synergies=21).validate()
+    TrainConfig(squash_z=False, decoder_init="random", n_synergies=21).validate()
   with pytest.raises(ValueError, match="unknown decoder"):
-    TrainConfig(decoder="cubic").validate()
+    TrainConfig(squash_z=False, decoder_init="random", decoder="cubic").validate()
   with pytest.raises(ValueError, match="unknown discriminator_target 'u'; known: z, activation"):
-    TrainConfig(discriminator_target="u").validate()
+    TrainConfig(squash_z=False, decoder_init="random", discriminator_target="u").validate()
   with pytest.raises(ValueError, match="minibatches"):
-    TrainConfig(num_envs=3, unroll_length=5, num_minibatches=4).validate()
+    TrainConfig(squash_z=False, decoder_init="random", num_envs=3, unroll_length=5, num_minibatches=4).validate()
   with pytest.raises(ValueError, match="alpha2"):
-    TrainConfig(decoder="identity", n_synergies=20).validate()
+    TrainConfig(squash_z=False, decoder_init="random", decoder="identity", n_synergies=20).validate()
   with pytest.raises(ValueError, match="task posture"):
     TrainConfig(**PPO, task_posture=True).validate()

@@ -21,7 +21,8 @@ from tests.toy_env import ReachAction
 
 TINY = dict(n_synergies=2, policy_hidden=(16, 16), value_hidden=(16, 16),
             discriminator_hidden=(16, 16), num_envs=4, unroll_length=5, num_minibatches=2,
-            update_epochs=1, eval_every=0, eval_envs=2, backend="native")
+            update_epochs=1, eval_every=0, eval_envs=2, backend="native",
+            squash_z=False, decoder_init="random")  # the paper's start: no prior to compute
 VALVE = TrainConfig(tasks=("valve1",), steps=4, checkpoint_every=2, **TINY)
 
 

@@ -52,7 +52,8 @@ def main():
   assert jax.device_count() == 2, jax.devices()
   out = {}
   small = dict(policy_hidden=(16,), value_hidden=(16,), discriminator_hidden=(16,),
-               num_envs=8, unroll_length=4, num_minibatches=2, update_epochs=2)
+               num_envs=8, unroll_length=4, num_minibatches=2, update_epochs=2, squash_z=False,
+               decoder_init="random")
   toy = [params_after(two_task_trainer(devices=n, **small), steps=3) for n in (1, 2)]
   out["toy_max_param_diff"] = max_difference(toy[0][0], toy[1][0])
   out["toy_losses"] = [toy[0][1], toy[1][1]]

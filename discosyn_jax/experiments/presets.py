@@ -40,7 +40,10 @@ PRIORED, PAPER = "-prior", "-paper"
 REWARD = dict(decoder_init="reward")
 REWARDED = "-reward"
 # full-action PPO: no discriminator, no decoder noise, a smaller initial std on 20 dims
-PPO = dict(decoder="identity", n_synergies=20, alpha2=0.0, alpha3=0.0, init_z_std=0.5)
+PPO = dict(decoder="identity", n_synergies=20, alpha2=0.0, alpha3=0.0, init_z_std=0.5,
+           squash_z=False)
+# the paper's start, random, named where a preset keeps it (TrainConfig's own is the prior)
+RANDOM = dict(decoder_init="random")
 
 PRESETS: dict[str, TrainConfig] = {
     # the README's main job: synergies (one shared linear decoder, b = 3, z bounded) on two
@@ -63,7 +66,8 @@ for _set, _sizes in (("set1", (3, 4)), ("set2", (4, 6))):
       # z bounded (squash_z): the decoder then has to learn its synergies; with z free a
       # random decoder did as well (docs/TRAINING_NOTES.md)
       PRESETS[f"{_set}-disco{_b}-{_kind}"] = TrainConfig(tasks=_tasks, n_synergies=_b,
-                                                        decoder=_kind, squash_z=True, **CPU_RUN)
+                                                        decoder=_kind, squash_z=True, **RANDOM,
+                                                        **CPU_RUN)
     _paper = PRESETS[f"{_set}-disco{_b}-linear"]
     PRESETS[f"{_set}-disco{_b}-linear{PAPER}"] = _paper
     PRESETS[f"{_set}-disco{_b}-linear{PRIORED}"] = _paper.replace(**PRIOR)
@@ -76,7 +80,7 @@ for _set in ("planted", "planted_slack"):
   _tasks = TASK_SETS[_set]
   for _kind in ("linear", "mlp"):
     PRESETS[f"{_set}-disco3-{_kind}"] = TrainConfig(tasks=_tasks, n_synergies=3, decoder=_kind,
-                                                   squash_z=True, **PLANTED_RUN)
+                                                   squash_z=True, **RANDOM, **PLANTED_RUN)
   PRESETS[f"{_set}-disco3-linear{DECAYED}"] = PRESETS[f"{_set}-disco3-linear"].replace(**DECAY)
 
 

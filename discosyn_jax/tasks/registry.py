@@ -225,3 +225,8 @@ def trainer(config, **kwargs):
   from discosyn_jax.training.trainer import Trainer
 
   return Trainer(config, make_envs(config), **kwargs)
+
+
+def names() -> tuple[str, ...]:
+  """Every registered task's name, ours and those registered since."""
+  return tuple(REGISTRY)

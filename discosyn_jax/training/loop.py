@@ -21,8 +21,10 @@ import jax
 
 from discosyn_jax import checks
 from discosyn_jax import config as config_lib
+from discosyn_jax import tasks
 from discosyn_jax.agent import networks
 from discosyn_jax.config import TrainConfig
+from discosyn_jax.env.task import not_finite
 from discosyn_jax.run import checkpoints, layout, logs, owner, reading, stop
 from discosyn_jax.synergies import fitting, priors
 from discosyn_jax.training import evaluation
@@ -32,6 +34,11 @@ from discosyn_jax.viz import plots
 
 class TrainingDiverged(RuntimeError):
   """A loss or a parameter became non-finite; the last good checkpoint is kept."""
+
+
+class TaskNotFinite(TrainingDiverged):
+  """A task's own values (a reward term, its success, its observation) became non-finite:
+  a bug in the task, named where it starts; the last good checkpoint is kept."""
 
 
 class WriteFailed(ValueError):
@@ -107,13 +114,15 @@ def load_trained(path: pathlib.Path, make_trainer: Callable[[TrainConfig], Train
 def train(config: TrainConfig, run_dir: pathlib.Path, *,
           make_trainer: Callable[[TrainConfig], Trainer], resume: bool = False,
           force: bool = False, progress: bool = True, log=print,
-          stop_at: float | None = None) -> dict[str, Any]:
+          stop_at: float | None = None,
+          on_eval: Callable[[int, dict], None] | None = None) -> dict[str, Any]:
   """Run (or continue) a training run in `run_dir`; return the final evaluation
   ("results"), state, trainer and compile time.
   `make_trainer(config)` builds the Trainer of the config the run goes on with (its envs
   and devices: `tasks.trainer` for the registered tasks), once the folder is checked.
   `stop_at`: end the run (final checkpoint and all) at the first evaluation at which every
-  task's deterministic success is at least this.
+  task's deterministic success is at least this. `on_eval(step, row)`: called after each
+  evaluation with its row of eval.jsonl (env_steps, wall_s, "<task>/success", ...).
 
   Everything that can refuse the run (the config, the folder, the envs, the memory they
   need) is checked before the run directory is made; the run directory is then this
@@ -139,7 +148,7 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *,
       writer.begin(lambda: config_lib.save(config, run_dir / layout.CONFIG_FILE), replace=force)
     at = {"step": 0, "checkpoint": None}  # where the run is: what a failure names
     try:
-      return _train(trainer, run_dir, resume, writer, at, progress, log, stop_at)
+      return _train(trainer, run_dir, resume, writer, at, progress, log, stop_at, on_eval)
     except BaseException as err:
       undone = writer.new and not writer.kept
       replaced = writer.undo() if undone else False
@@ -156,12 +165,12 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *,
             f"could not write {err.filename or run_dir}: {err.strerror or err}"
         raise WriteFailed(f"training stopped at step {at['step']}: {what}; {where}") from None
       if isinstance(err, TrainingDiverged):
-        raise TrainingDiverged(f"{err}; {where}") from None
+        raise type(err)(f"{err}; {where}") from None
       raise
 
 
 def _train(trainer: Trainer, run_dir: pathlib.Path, resume: bool, writer: owner.Writer,
-           at: dict, progress: bool, log, stop_at: float | None) -> dict[str, Any]:
+           at: dict, progress: bool, log, stop_at: float | None, on_eval=None) -> dict[str, Any]:
   """The run itself, in a folder that is ours; `at` follows its step and last good
   checkpoint."""
   config = trainer.config
@@ -191,7 +200,7 @@ def _train(trainer: Trainer, run_dir: pathlib.Path, resume: bool, writer: owner.
     with open(run_dir / layout.METRICS_FILE, "a") as metrics_file, \
          open(run_dir / layout.EVAL_FILE, "a") as eval_file, logs.TensorBoard(run_dir, history) as board:
       if resume and _evaluates_at(config, step):  # the evaluation the cut removed, redone
-        _log_eval((eval_file, board), evaluation.evaluate(trainer, state), step, config,
+        _log_eval((eval_file, board, on_eval), evaluation.evaluate(trainer, state), step, config,
                   time.perf_counter() - start)
       tick = time.perf_counter()
       while int(state.step) < config.steps:
@@ -199,7 +208,9 @@ def _train(trainer: Trainer, run_dir: pathlib.Path, resume: bool, writer: owner.
         state, metrics = train_step(state)
         if reference is not None:
           metrics.update(trainer.decoder_drift(reference, state.params))
-        metrics = {k: float(v) for k, v in jax.device_get(metrics).items()}
+        metrics = jax.device_get(metrics)
+        own_values = metrics.pop("finite_values")  # checked below, not logged
+        metrics = {k: float(v) for k, v in metrics.items()}
         for name in config.tasks:  # no episode ended in this rollout: no return or success to log
           if metrics.get(f"{name}/episodes") == 0:
             del metrics[f"{name}/return"], metrics[f"{name}/success"]
@@ -212,8 +223,7 @@ def _train(trainer: Trainer, run_dir: pathlib.Path, resume: bool, writer: owner.
         metrics_file.write(json.dumps(metrics) + "\n")
         metrics_file.flush()
         board.write(metrics, "train")
-        if not metrics["finite"] or not math.isfinite(metrics["loss"]):
-          raise TrainingDiverged(f"non-finite loss or parameters at step {step}; training stopped")
+        _check_finite(own_values, metrics, step)
         if bar is not None:
           shown.update({n: metrics[f"{n}/success"] for n in config.tasks if f"{n}/success" in metrics})
           bar.set_postfix_str(" ".join(f"{n}:{v:.0%}" for n, v in list(shown.items())[:6]),
@@ -221,7 +231,7 @@ def _train(trainer: Trainer, run_dir: pathlib.Path, resume: bool, writer: owner.
           bar.update(1)
         if _evaluates_at(config, step):
           results, evaluated_at = evaluation.evaluate(trainer, state), step
-          _log_eval((eval_file, board), results, step, config, now - start)
+          _log_eval((eval_file, board, on_eval), results, step, config, now - start)
           if stop_at is not None and all(r["success"] >= stop_at for r in results.values()):
             log(f"every task at >= {stop_at:.0%} deterministic success at step {step}: "
                 "the run ends here")
@@ -233,7 +243,7 @@ def _train(trainer: Trainer, run_dir: pathlib.Path, resume: bool, writer: owner.
         bar = None
       if evaluated_at != step:
         results = evaluation.evaluate(trainer, state)
-        _log_eval((eval_file, board), results, step, config, time.perf_counter() - start)
+        _log_eval((eval_file, board, on_eval), results, step, config, time.perf_counter() - start)
     save(final=True)
     curves = plots.run_curves(run_dir, run_dir / layout.PLOTS_DIR)
   finally:
@@ -262,6 +272,18 @@ def _start(trainer: Trainer, run_dir: pathlib.Path, resume: bool, log):
   return None, trainer.init(decoder_params=decoder)
 
 
+def _check_finite(own_values: dict, metrics: dict, step: int) -> None:
+  """Stop a run whose numbers went non-finite in train step `step`: TaskNotFinite naming
+  a task's values that did (trainer._finite_values), else TrainingDiverged."""
+  for name, values in own_values.items():
+    bad = [part for part, finite in values.items() if not finite]
+    if bad:
+      raise TaskNotFinite(not_finite(tasks.label(name), bad, f"at train step {step}") +
+                          "; training stopped")
+  if not metrics["finite"] or not math.isfinite(metrics["loss"]):
+    raise TrainingDiverged(f"non-finite loss or parameters at step {step}; training stopped")
+
+
 def _evaluates_at(config: TrainConfig, step: int) -> bool:
   """Whether the loop evaluates after train step `step` (the end of the run aside)."""
   return bool(config.eval_every) and step % config.eval_every == 0 and 0 < step < config.steps
@@ -286,12 +308,14 @@ def _where(checkpoint: pathlib.Path | None, undone: bool, replaced: bool) -> str
 
 
 def _log_eval(outputs, results, step, config, wall_s):
-  file, board = outputs
+  file, board, callback = outputs
   row = {"step": step, "env_steps": step * config.env_steps_per_train_step, "wall_s": wall_s}
   row.update({f"{n}/{k}": v for n, r in results.items() for k, v in r.items()})
   file.write(json.dumps(row) + "\n")
   file.flush()
   board.write(row, "eval")
+  if callback is not None:
+    callback(step, dict(row))
 
 
 def _progress(enabled: bool, start: int, total: int):
