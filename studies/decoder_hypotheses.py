@@ -26,7 +26,6 @@ jax_setup.setup_jax()  # the compile cache; MJX imported quietly
 
 from discosyn_jax import config as config_lib  # noqa: E402
 from discosyn_jax.run import layout, logs, reading
-from discosyn_jax.training import loop  # noqa: E402
 from discosyn_jax.experiments import presets  # noqa: E402
 
 # variant -> TrainConfig changes to set1-disco3-linear (one hypothesis each)
@@ -86,7 +85,7 @@ def main(argv=None):
                             checkpoint_every=args.eval_every, **VARIANTS[variant]).validate()
       run = out / f"{variant}-seed{seed}"
       if not reading.finished(run, config):
-        loop.train(config, run, resume=(run / layout.CONFIG_FILE).is_file(), progress=False)
+        discosyn_jax.train(config, run, resume=(run / layout.CONFIG_FILE).is_file(), progress=False)
   print(summary(out))
 
 

@@ -73,14 +73,14 @@ def report(label, env, info, pstate, success, done):
         f"{1000 * deepest_penetration(env.mj_model, pstate.raw, stride=7):4.1f} mm", flush=True)
 
 
-def main():
+def main(argv=None):
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument("--tasks", nargs="+", default=list(DEFAULT_TASKS))
   parser.add_argument("--policies", nargs="+", default=["random", "scripted"], choices=["random", "scripted"])
   parser.add_argument("--episodes", type=int, default=128)
   parser.add_argument("--seed", type=int, default=0)
   parser.add_argument("--hand", default=hands.DEFAULT, help="a shipped hand (scripted motions: ours)")
-  args = parser.parse_args()
+  args = parser.parse_args(argv)
 
   for name in args.tasks:
     env = tasks.make(name, backend="native", hand=args.hand)

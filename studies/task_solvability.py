@@ -27,7 +27,6 @@ jax_setup.setup_jax()  # the compile cache; MJX imported quietly
 
 from discosyn_jax import config as config_lib  # noqa: E402
 from discosyn_jax.run import layout, logs, reading
-from discosyn_jax.training import loop  # noqa: E402
 from discosyn_jax.experiments import presets  # noqa: E402
 
 TARGET = 0.8  # deterministic success that counts as learnt
@@ -82,8 +81,8 @@ def main(argv=None):
       config = config_for(task, seed, args.eval_every)
       run = out / f"{task}-seed{seed}"
       if not reading.finished(run, config):
-        loop.train(config, run, resume=(run / layout.CONFIG_FILE).is_file(), progress=False,
-                   stop_at=TARGET)
+        discosyn_jax.train(config, run, resume=(run / layout.CONFIG_FILE).is_file(),
+                           progress=False, stop_at=TARGET)
   print(summary(out))
 
 

@@ -50,14 +50,14 @@ def report(name, env, start, angles, qvels, raws, success):
         f"{1000 * deepest_penetration(env.mj_model, raws, stride=5):5.1f} mm", flush=True)
 
 
-def main():
+def main(argv=None):
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument("--valves", nargs="+", default=list(tasks.TASK_SETS["set1"]))
   parser.add_argument("--frictionloss", type=float, nargs="+", default=[None])
   parser.add_argument("--damping", type=float, nargs="+", default=[None])
   parser.add_argument("--episodes", type=int, default=256)
   parser.add_argument("--seed", type=int, default=0)
-  args = parser.parse_args()
+  args = parser.parse_args(argv)
 
   def uniform(t, key, n):
     return jax.random.uniform(key, (n, 20), minval=-1.0, maxval=1.0)

@@ -363,7 +363,7 @@ def test_a_frozen_run_resumes_without_its_decoder_source(experiments, tmp_path):
   loop.train(config, tmp_path / "run", make_trainer=make_trainer, progress=False, log=lambda *a: None)
   source.unlink()
   with pytest.raises(ValueError, match="does not exist"):
-    fitting.starting_decoder(config)
+    fitting.load_decoder(config.decoder_from, config)
   out = loop.train(config.replace(steps=2), tmp_path / "run", resume=True, progress=False,
                    make_trainer=make_trainer, log=lambda *a: None)
   assert int(out["state"].step) == 2

@@ -6,14 +6,13 @@ import pathlib
 import nbformat
 from nbclient import NotebookClient
 
-NOTEBOOKS = pathlib.Path(__file__).resolve().parent.parent / "experiments" / "notebooks"
+NOTEBOOKS = pathlib.Path(__file__).resolve().parent.parent / "notebooks"
 
 TINY_PARAMETERS = '''REPO_URL = "unused: the package is installed"
 EXTRA = ""
 RUN = "runs/tiny"
-TRAIN_FLAGS = ["--tasks", "valve1", "--steps", "2", "--num-envs", "4", "--unroll-length", "5",
-               "--minibatches", "2", "--epochs", "1", "--eval-every", "0", "--eval-envs", "2",
-               "--checkpoint-every", "0"]
+CHANGES = dict(tasks=("valve1",), steps=2, num_envs=4, unroll_length=5, num_minibatches=2,
+               update_epochs=1, eval_every=0, eval_envs=2, checkpoint_every=0)
 TASK = "valve1"
 RENDER_FLAGS = ["--camera", "front", "--height", "96", "--width", "128"]'''
 
@@ -38,6 +37,8 @@ def test_quickstart_notebook_runs_top_to_bottom(tmp_path):
   shown = [o for o in outputs if o.output_type == "display_data"]
   assert sum("image/png" in o.data for o in shown) == 5  # 3 curves, postures, matrix
   assert sum("<video" in o.data.get("text/html", "") for o in shown) == 1
+  printed = "".join(o.get("text", "") for o in outputs if o.output_type == "stream")
+  assert "40 env steps  valve1:" in printed  # the progress callback: 1 task x 4 envs x 5 steps x 2
 
 
 def test_reproduce_notebook_is_valid_and_runs_the_gpu_experiments_and_report():

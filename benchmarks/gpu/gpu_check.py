@@ -49,7 +49,8 @@ import jax.numpy as jnp  # noqa: E402
 
 from discosyn_jax import tasks  # noqa: E402
 from discosyn_jax.training import loop  # noqa: E402
-from discosyn_jax.experiments import paper, physics_study  # noqa: E402
+from discosyn_jax.experiments import paper  # noqa: E402
+from studies import physics_study  # noqa: E402
 
 
 class Log:

@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# On the device machine, from the repository root (the device tool's working tree), with the
-# wheels of wheels.sh carried in .whl/: install them beside the image's jax, then run the
-# prepared GPU check into $OUT. Arguments go to gpu_check.py (e.g. --budget-s 420).
-# The compile cache is an ignored folder of the tree, which a warm machine keeps for the next
-# call (in /tmp, call 1's cache did not spare call 2 its start, 2026-12-04).
+# On a bare GPU machine, from the repository root, with the wheels of wheels.sh in .whl/:
+# install them beside the image's jax, then run the prepared GPU check into $OUT (default
+# runs/gpu_check). Arguments go to gpu_check.py (e.g. --budget-s 420); docs/SCALING.md.
+# The compile cache is an ignored folder of the tree (runs/jax-cache), kept for a later run
+# on the same machine (a cache in a temporary folder did not spare a second run its start,
+# 2026-12-04).
 set -o pipefail
 python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade \
   --target /tmp/site .whl/*.whl || exit 1

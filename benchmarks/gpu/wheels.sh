@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# The wheels the GPU device image lacks, for Python 3.12 on x86-64 Linux, in .whl/ (ignored by
-# git; the device tool carries it). The image already holds jax 0.11.2 (CUDA 13), flax,
-# optax, orbax-checkpoint, chex, numpy, scikit-learn, matplotlib, imageio, tqdm, absl-py and
-# etils. brax imports jaxopt (brax.generalized) and ml_collections at import time.
+# The wheels a bare GPU machine's image lacks, for Python 3.12 on x86-64 Linux, in .whl/
+# (ignored by git; copied to the GPU machine with the working tree). The image already holds
+# jax 0.11.2 (CUDA 13), flax, optax, orbax-checkpoint, chex, numpy, scikit-learn, matplotlib,
+# imageio, tqdm, absl-py and etils. brax imports jaxopt (brax.generalized) and ml_collections
+# at import time.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 grep -qx '/.whl/' .git/info/exclude 2>/dev/null || echo '/.whl/' >> .git/info/exclude

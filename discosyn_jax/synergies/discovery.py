@@ -36,7 +36,7 @@ def initial_basis(config: TrainConfig, action_size: int) -> np.ndarray | None:
     return None
   if config.decoder_from:
     try:
-      params = fitting.starting_decoder(config)
+      params = fitting.load_decoder(config.decoder_from, config)
     except ValueError:
       return None
   else:
@@ -44,10 +44,6 @@ def initial_basis(config: TrainConfig, action_size: int) -> np.ndarray | None:
   return fitting.basis(fitting.architecture(config.to_dict()), params)
 
 
-def overlap(a: np.ndarray, b: np.ndarray) -> float:
-  return float(diagnostics.overlap(a, b))
-
-
 def cross_seed(bases: list[np.ndarray]) -> list[float]:
   """The overlap of every pair of bases (seeds)."""
-  return [overlap(a, b) for a, b in itertools.combinations(bases, 2)]
+  return [float(diagnostics.overlap(a, b)) for a, b in itertools.combinations(bases, 2)]

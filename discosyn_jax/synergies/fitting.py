@@ -265,12 +265,6 @@ def _check_file(path, meta, flat: dict) -> None:
                        f"for that decoder")
 
 
-def starting_decoder(config) -> dict | None:
-  """The decoder params a fresh run of `config` starts from: its `decoder_from`, else None
-  (the Trainer's random initialisation)."""
-  return load_decoder(config.decoder_from, config) if config.decoder_from else None
-
-
 def load_decoder(path, config) -> dict:
   """The decoder params of `path` for a run of `config`; ValueError in one line when the
   decoder is not the one the config describes."""

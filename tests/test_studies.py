@@ -1,0 +1,54 @@
+"""The studies beside the package (studies/README.md): each still imports and answers
+--help on today's code, and those that run in seconds run on a tiny setting and print
+their table. (same_logs has its own tests, test_same_logs.py.)"""
+
+import importlib
+import pathlib
+import sys
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+STUDIES = sorted(p.stem for p in (ROOT / "studies").glob("*.py") if p.stem != "__init__")
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _checkout_on_path():
+  sys.path.insert(0, str(ROOT))  # studies/ lives in the repository, not in the package
+  yield
+  sys.path.remove(str(ROOT))
+
+
+def study(name):
+  return importlib.import_module(f"studies.{name}")
+
+
+def test_the_index_names_every_study():
+  index = (ROOT / "studies" / "README.md").read_text()
+  assert STUDIES and all(f"{name}.py" in index for name in STUDIES)
+
+
+@pytest.mark.parametrize("name", STUDIES)
+def test_every_study_imports_and_answers_help(name, capsys):
+  with pytest.raises(SystemExit) as stop:
+    study(name).main(["--help"])
+  assert stop.value.code == 0
+  assert "usage:" in capsys.readouterr().out
+
+
+def test_the_physics_study_measures_a_setting(capsys):
+  study("physics_study").main(["--tasks", "valve0", "--settings", "ref", "--batch", "2",
+                               "--steps", "2", "--repeats", "1", "--episodes", "2",
+                               "--long-episodes", "1", "--long-steps", "4"])
+  out = capsys.readouterr().out
+  assert "| valve0 | ref |" in out and "cheapest faithful setting ref" in out
+
+
+def test_the_task_calibration_runs_a_policy(capsys):
+  study("task_calibration").main(["--tasks", "valve3", "--episodes", "2", "--policies", "random"])
+  assert "valve3" in capsys.readouterr().out
+
+
+def test_the_valve_calibration_runs_a_valve(capsys):
+  study("valve_calibration").main(["--valves", "valve0", "--episodes", "2"])
+  assert "valve0" in capsys.readouterr().out
