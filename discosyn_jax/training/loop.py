@@ -47,12 +47,13 @@ class WriteFailed(ValueError):
 
 
 def starting_decoder(trainer: Trainer) -> dict | None:
-  """The decoder a fresh run starts from: its `decoder_from`, the physics prior's start
-  (priors.py, computed once per trainer), or None (the Trainer's random one)."""
+  """The decoder a fresh run starts from (the one place that decides it): its
+  `decoder_from`, a prior's start (priors.py, computed once per trainer), or None (the
+  Trainer's random one)."""
   config = trainer.config
   if config.decoder_init in config_lib.PRIORS:
     return _prior_start(trainer)
-  return fitting.starting_decoder(config)
+  return fitting.load_decoder(config.decoder_from, config) if config.decoder_from else None
 
 
 @functools.lru_cache(maxsize=2)
