@@ -8,6 +8,7 @@ import argparse
 import os
 import signal
 import sys
+import traceback
 
 from discosyn import commands
 
@@ -298,18 +299,36 @@ def _run(args) -> int:
   return 0
 
 
+# set to 1: a command that fails in one line prints the whole traceback before it
+TRACEBACK = "DISCOSYN_TRACEBACK"
+
+
 def _refused(err: Exception) -> int:
   """The one line and exit status of a command that could not do its work."""
-  from discosyn_jax.training.loop import TrainingDiverged
+  line, code = _one_line(err)
+  if line is None:  # not a failure we know: a bug, its traceback
+    raise err
+  if os.environ.get(TRACEBACK) == "1":
+    traceback.print_exception(err)
+  elif _is_task_error(err):  # the task's own code raised: how to see the rest
+    line += f" ({TRACEBACK}=1 shows the whole traceback)"
+  print(line, file=sys.stderr)
+  return code
 
-  if isinstance(err, (commands.UsageError, ValueError)):
-    print(f"discosyn: error: {err}", file=sys.stderr)
-    return 2
+
+def _one_line(err: Exception) -> tuple[str | None, int]:
+  from discosyn_jax.training.loop import TaskNotFinite, TrainingDiverged
+
+  if isinstance(err, (commands.UsageError, ValueError, TaskNotFinite)):
+    return f"discosyn: error: {err}", 2
   if isinstance(err, OSError):  # a file that cannot be read or written: a path, a full disk
-    print(f"discosyn: error: {err.filename + ': ' if err.filename else ''}"
-          f"{err.strerror or err}", file=sys.stderr)
-    return 2
+    return (f"discosyn: error: {err.filename + ': ' if err.filename else ''}"
+            f"{err.strerror or err}"), 2
   if isinstance(err, TrainingDiverged):  # the run stopped; its checkpoints are kept
-    print(f"discosyn: {err}", file=sys.stderr)
-    return 1
-  raise err
+    return f"discosyn: {err}", 1
+  return None, 1
+
+
+def _is_task_error(err: Exception) -> bool:
+  task = sys.modules.get("discosyn_jax.env.task")  # not loaded: no task's code ran
+  return task is not None and isinstance(err, task.TaskError)

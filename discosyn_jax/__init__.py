@@ -20,7 +20,7 @@ import os as _os
 import sys as _sys
 
 # XLA's CPU runtime deadlocked on batched MJX steps with its concurrency-optimised
-# scheduler (5 of 5 runs, DESIGN.md); the flag must be set before jax is imported.
+# scheduler (5 of 5 runs); the flag must be set before jax is imported.
 XLA_FLAG = "--xla_cpu_enable_concurrency_optimized_scheduler=false"
 if XLA_FLAG.split("=")[0] not in _os.environ.get("XLA_FLAGS", ""):
   _os.environ["XLA_FLAGS"] = (_os.environ.get("XLA_FLAGS", "") + " " + XLA_FLAG).strip()

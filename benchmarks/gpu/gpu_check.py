@@ -1,14 +1,14 @@
-"""The prepared GPU check: one call on a bare device machine measures the GPU path end to end.
+"""The GPU check: one call on a fresh GPU machine measures the GPU path end to end.
 
-  bash benchmarks/gpu/wheels.sh          # here, once: the wheels the device image lacks
-  # on the device (docs/SCALING.md has the exact call):
+  bash benchmarks/gpu/wheels.sh          # once: the wheels a bare GPU image lacks
+  # on the GPU machine (docs/SCALING.md has the exact call):
   python3 benchmarks/gpu/gpu_check.py --methods DiscoSyn3-L-reward --budget-s 500 --out $OUT
 
 Each result one JSON line in OUT/gpu_check.jsonl as soon as it is measured (a run cut
 short keeps what it measured); the methods (--methods: rows of the paper's tables,
 configured as `discosyn experiment` configures them at --scale and --seed) one after the
 other, each trained as soon as it has started. On a cold machine the start of the `gpu`
-scale takes minutes (docs/BENCHMARKS.md, "GPU"): give a call of 15 device-minutes one method.
+scale takes minutes (docs/BENCHMARKS.md, "GPU"): a call of 15 minutes fits one method.
   versions   python, jax, mujoco, mujoco-mjx, brax, the devices
   phase      per method, as each part of its start ends: Trainer build, the physics
              prior's start where the method has one, `init()`, the compiles of the train

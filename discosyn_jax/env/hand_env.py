@@ -12,7 +12,7 @@ import jax.numpy as jnp
 from brax.envs.base import Env, State
 
 from discosyn_jax.env import hands, physics
-from discosyn_jax.env.task import Task
+from discosyn_jax.env.task import Task, own_code
 
 
 def _check_shapes(name: str, state: State) -> None:
@@ -32,7 +32,8 @@ class HandEnv(Env):
                **backend_kwargs):
     self.task = task
     self.hand = hands.load(hand)
-    self.mj_model = task.build_model(self.hand)
+    with own_code(task, self.hand):  # its edit_spec and bind
+      self.mj_model = task.build_model(self.hand)
     self.physics = physics.make_backend(
         backend, self.mj_model, task.config.n_substeps, **backend_kwargs)
     lo, hi = (jnp.asarray(self.mj_model.actuator_ctrlrange[:, i], jnp.float32) for i in (0, 1))
@@ -60,9 +61,16 @@ class HandEnv(Env):
     return self.physics.name
 
   def action_to_ctrl(self, action: jax.Array) -> jax.Array:
+    # a NaN action (a policy fed a task's NaN observation, which the train step names) holds
+    # its actuator at mid-range: MuJoCo C would reset the simulation with a warning per env
+    action = jnp.nan_to_num(action)
     return self._ctrl_mid + jnp.clip(action, -1.0, 1.0) * self._ctrl_half
 
   def reset(self, rng: jax.Array) -> State:
+    with own_code(self.task, self.hand):
+      return self._reset(rng)
+
+  def _reset(self, rng: jax.Array) -> State:
     qpos, qvel, info = self.task.initial_state(rng)
     pstate = self.physics.init(qpos, qvel)
     view = self.physics.view(pstate)
@@ -78,20 +86,27 @@ class HandEnv(Env):
     if jnp.shape(action) != (self.action_size,):
       raise ValueError(f"an action of one env has shape ({self.action_size},), not "
                        f"{jnp.shape(action)}; step a batch of envs with jax.vmap")
+    with own_code(self.task, self.hand):
+      return self._step(state, action)
+
+  def _step(self, state: State, action: jax.Array) -> State:
     info = state.info
     prev = self.physics.view(state.pipeline_state)
     pstate = self.physics.step(state.pipeline_state, self.action_to_ctrl(action))
     view = self.physics.view(pstate)
-    # A diverged simulation ends its episode with zero reward and a finite observation;
-    # the wrapper's reset replaces its state.
+    # A diverged simulation ends its episode with zero reward and success and a finite
+    # observation; the wrapper's reset replaces its state. Elsewhere a task's values pass as
+    # they are: a NaN there is the task's own, and the train step names it.
     diverged = 1.0 - jnp.isfinite(jnp.concatenate([view.qpos, view.qvel])).all().astype(jnp.float32)
     terms = {k: jnp.where(diverged > 0, 0.0, v)
              for k, v in self.task.reward_terms(prev, view, info).items()}
     reward = sum(terms.values())
     done = jnp.maximum(self.task.terminated(view, info), diverged)
-    obs = jnp.nan_to_num(self.task.observation(view, info), posinf=0.0, neginf=0.0)
+    obs = self.task.observation(view, info)
+    obs = jnp.where(diverged > 0, jnp.nan_to_num(obs, posinf=0.0, neginf=0.0), obs)
     # the state's metrics updated, not replaced: keys that wrappers add (Brax's EvalWrapper
     # adds "reward") must keep the state's structure through Brax's scans
     metrics = {**state.metrics, **{f"reward/{k}": v for k, v in terms.items()}}
-    metrics.update(success=self.task.success(view, info) * (1.0 - diverged), diverged=diverged)
+    metrics.update(success=jnp.where(diverged > 0, 0.0, self.task.success(view, info)),
+                   diverged=diverged)
     return state.replace(pipeline_state=pstate, obs=obs, reward=reward, done=done, metrics=metrics)

@@ -8,7 +8,9 @@ physics backends.
 from __future__ import annotations
 
 import abc
+import contextlib
 import dataclasses
+import os
 import pathlib
 from typing import Any
 
@@ -109,3 +111,67 @@ class Task(abc.ABC):
     """1.0 where the episode ends before its time limit (e.g. a dropped object)."""
     del view, info
     return jax.numpy.zeros(())
+
+
+class TaskError(ValueError):
+  """An exception raised by a task's own code, in one line: the task, its function, the
+  file and line where it was raised, and the exception (its __cause__, with the traceback)."""
+
+
+@contextlib.contextmanager
+def own_code(task: Task, hand: hands.Hand | None = None):
+  """Around calls into a task's functions (building its scene, tracing its reset and step):
+  an exception raised in the task's own file becomes a TaskError that says where. Costs
+  nothing once traced: it runs in Python only, at build and trace time."""
+  try:
+    yield
+  except TaskError:
+    raise
+  except Exception as err:
+    line = _blame(task, hand, err)
+    if line is None:  # not the task's code: ours, MuJoCo's or JAX's, as it is
+      raise
+    raise TaskError(line) from err
+
+
+def _files(task: Task) -> set[str]:
+  """The files that define the functions of the task's class and of its own base classes
+  (a task may inherit from another file of its author's). Read from the functions' code:
+  `inspect.getsourcefile` finds no file for a class whose module is not in sys.modules, as a
+  task file's (tasks.load runs it without adding it there)."""
+  files = set()
+  for cls in type(task).__mro__:
+    if cls is not Task and issubclass(cls, Task):
+      for value in vars(cls).values():
+        code = getattr(getattr(value, "__func__", value), "__code__", None)
+        if code is not None:
+          files.add(os.path.realpath(code.co_filename))
+  return files
+
+
+def _blame(task: Task, hand: hands.Hand | None, err: Exception) -> str | None:
+  """The line of an exception whose traceback passes through the task's files: the
+  function of the task it left (the outermost such frame) and where it was raised there
+  (the innermost); None where no frame is the task's."""
+  files, frames, tb = _files(task), [], err.__traceback__
+  while tb is not None:
+    if os.path.realpath(tb.tb_frame.f_code.co_filename) in files:
+      frames.append(tb)
+    tb = tb.tb_next
+  if not frames:
+    return None
+  function, raised = frames[0].tb_frame.f_code.co_name, frames[-1]
+  on = f" on hand {hand.name}" if hand is not None and hand.name != hands.DEFAULT else ""
+  message = next(iter(str(err).strip().splitlines()), "")  # JAX's messages run on for lines
+  return (f"task {type(task).__name__}{on}: {function} failed at "
+          f"{raised.tb_frame.f_code.co_filename}:{raised.tb_lineno}: {type(err).__name__}"
+          f"{': ' + message if message else ''}")
+
+
+def not_finite(task: str, parts: list[str], where: str) -> str:
+  """One line naming a task's values that are NaN or infinite `where`: `parts` are
+  "observation", "success", "reward/TERM" (a reward term) or "reward" (an env without terms)."""
+  names = [f"reward term {p.removeprefix('reward/')!r}" if p.startswith("reward/") else
+           "the reward" if p == "reward" else f"its {p}" for p in parts]
+  verb = "is" if len(names) == 1 else "are"
+  return f"task {task}: {', '.join(names)} {verb} non-finite (NaN or infinite) {where}"

@@ -12,8 +12,8 @@ in turns). The priors a config names are config.PRIORS. A prior depends on the t
 hand and the physics, never on a training seed, so every seed's decoder starts in the same
 subspace (`start`: each keeps its own random scale, bias and noise). It is measured on
 MuJoCo C (the reference physics, on the CPU) whatever backend the run trains on
-(`reference`): a CPU and a GPU run of a set start alike, and MJX on a GPU spent 4 of its
-15 minutes compiling the measurement (docs/BENCHMARKS.md, "GPU").
+(`reference`): a CPU and a GPU run of a set start alike, and MJX on a GPU spent 4 minutes
+compiling the measurement (docs/TRAINING_NOTES.md).
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from discosyn_jax.env import hand_env, hands
+from discosyn_jax.env.task import not_finite
 from discosyn_jax.synergies import fitting
 
 DELTA = 0.5  # the push on each action, in its [-1, 1] range
@@ -99,19 +100,30 @@ def _jacobians(env, response: str, act) -> np.ndarray:
     state, action = pair
 
     def outcome(a):
+      """(the response, {part: its values}): the parts it is made of, checked finite."""
       after = env.step(state, jnp.clip(a, -1, 1))
       if response == "reward":
-        return after.reward[None]
-      return env.physics.view(after.pipeline_state).qvel[obj_v]
+        return after.reward[None], {k: v for k, v in after.metrics.items() if k.startswith("reward/")}
+      qvel = env.physics.view(after.pipeline_state).qvel[obj_v]
+      return qvel, {"object velocity": qvel}
 
     push = DELTA * jnp.eye(size)
-    plus = jax.vmap(lambda d: outcome(action + d))(push)
-    minus = jax.vmap(lambda d: outcome(action - d))(push)
-    return ((plus - minus) / (2 * DELTA)).T
+    plus, plus_parts = jax.vmap(lambda d: outcome(action + d))(push)
+    minus, minus_parts = jax.vmap(lambda d: outcome(action - d))(push)
+    finite = {k: jnp.isfinite(plus_parts[k]).all() & jnp.isfinite(minus_parts[k]).all()
+              for k in plus_parts}
+    return ((plus - minus) / (2 * DELTA)).T, finite
 
   states, actions = collect(jax.random.PRNGKey(SEED))
-  return np.asarray(jax.jit(lambda s, a: jax.lax.map(jacobian, (s, a), batch_size=CHUNK))(
-      states, actions))
+  jac, finite = jax.jit(lambda s, a: jax.lax.map(jacobian, (s, a), batch_size=CHUNK))(
+      states, actions)
+  # a NaN in a task's reward leaves the eigen-decomposition without convergence: named here
+  bad = [part for part, ok in finite.items() if not np.all(ok)]
+  if bad:
+    raise ValueError(not_finite(type(env.task).__name__, bad,
+                                f"at the states the {response} prior is measured at "
+                                "(the decoder's start, before training)"))
+  return np.asarray(jac)
 
 
 def metric(env, response: str = "objects", act=None) -> np.ndarray:

@@ -19,7 +19,7 @@ from brax.envs.base import Env  # noqa: E402
 from discosyn_jax.config import PHYSICS  # noqa: E402
 from discosyn_jax.env import hands  # noqa: E402
 from discosyn_jax.env.hand_env import HandEnv  # noqa: E402
-from discosyn_jax.env.task import Task, TaskConfig  # noqa: E402
+from discosyn_jax.env.task import Task, TaskConfig, TaskError  # noqa: E402
 from discosyn_jax.tasks import dice, planted, screw, valve, valve_goal, weight_pull  # noqa: E402
 from discosyn_jax.tasks.sets import TASK_SETS  # noqa: E402
 
@@ -128,8 +128,8 @@ def load(spec: str) -> str:
     module = importlib.util.module_from_spec(module_spec)
     try:
       module_spec.loader.exec_module(module)
-    except (SyntaxError, ImportError) as err:
-      raise ValueError(f"{where}: {type(err).__name__}: {err}") from None
+    except Exception as err:  # the file's own code: one line that points at it
+      raise TaskError(_load_failed(where, path, err)) from err
   else:
     name = spec
     if name in REGISTRY:
@@ -141,6 +141,30 @@ def load(spec: str) -> str:
   if not hasattr(module, attr):
     raise ValueError(f"{where} defines no {attr}")
   return register(name, getattr(module, attr))
+
+
+# names that older releases installed at the top level, and where they live now
+_MOVED_TOP = {"tasks": "discosyn_jax.tasks", "experiments": "discosyn_jax.experiments"}
+
+
+def _load_failed(where: str, path: pathlib.Path, err: Exception) -> str:
+  """One line for a task file that fails while it is run: where in the file, and what."""
+  if isinstance(err, SyntaxError):
+    return f"{where}:{err.lineno}: SyntaxError: {err.msg}"
+  line = next((tb.tb_lineno for tb in reversed(list(_frames(err.__traceback__)))
+               if pathlib.Path(tb.tb_frame.f_code.co_filename).resolve() == path), None)
+  message = next(iter(str(err).strip().splitlines()), "")
+  text = f"{where}{f':{line}' if line else ''}: {type(err).__name__}{': ' + message if message else ''}"
+  moved = _MOVED_TOP.get(getattr(err, "name", None) or "")
+  if isinstance(err, ModuleNotFoundError) and moved:
+    text += f" (`{err.name}` is now `{moved}`: `from {moved} import ...`)"
+  return text
+
+
+def _frames(tb):
+  while tb is not None:
+    yield tb
+    tb = tb.tb_next
 
 
 def label(name: str) -> str:

@@ -11,9 +11,9 @@ speed, and how far it is in (slide, m).
 Reward ([page]): a * clip(w, -w_max, w_max) + b, w the screwing-in angular velocity (mean
 over the control step). Success: driven in by `success_depth` in the episode's last state.
 
-Numbers, and why: pitch 0.003 m/rad (TASKS.md); the hinge resists like the valves'
+Numbers, and why: pitch 0.003 m/rad (the task's specification); the hinge resists like the valves'
 (frictionloss, damping) so that brushing fingers do not turn it; success at 0.01 m, a
-3.3 rad turn (TASKS.md proposed 0.02 m; see docs/TASKS_NOTES.md for the measured rates
+3.3 rad turn (the specification proposed 0.02 m; see docs/TASKS_NOTES.md for the measured rates
 that set it).
 """
 

@@ -11,7 +11,7 @@ Reward ([page]: r = m * cube height + n): `reward_scale` * lift + `reward_bias`,
 above the rest position. Success: lift >= `success_lift` in the episode's last state.
 
 Numbers, and why: m = 20 per metre makes a 0.05 m lift worth 1 per step, the scale of the
-valves' rewards; success at 0.03 m (TASKS.md). The rope's ball joints get a little
+valves' rewards; success at 0.03 m (the task's specification). The rope's ball joints get a little
 stiffness (0.02 N m / rad) so that it stands up to the hand instead of collapsing on the
 weight, and it is soft enough for the fingers to bend; its links' armature keeps those
 springs stable at the 4 ms step (docs/TASKS_NOTES.md has the measured figures).
