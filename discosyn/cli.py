@@ -159,9 +159,13 @@ def build_parser() -> argparse.ArgumentParser:
   p.set_defaults(fn=commands.cmd_keep)
 
   p = sub.add_parser("report", help="REPORT.md and figures from run folders: solved tasks, "
+                     "interval estimates (IQM, mean, P(improvement), performance profiles), "
                      "explained variance, curves, t-SNE, transfer, sparse reward",
                      description="REPORT.md and figures from run folders or their records "
-                     "alone (`discosyn keep`): per set, each task's final success, mean "
+                     "alone (`discosyn keep`): per set, the IQM and mean of the final "
+                     "success and of the mean over the curve with 95 % stratified bootstrap "
+                     "intervals (rliable, a fixed seed), the probability that the default row "
+                     "improves on each other row, and a performance profile; each task's final success, mean "
                      "(min–max) [seeds] with the paper's marks, and each row's success over "
                      "the tasks at the end and over the curve; explained variance; curves; "
                      "the synergy subspaces; t-SNE of z (z.npz, else the checkpoint); "

@@ -108,6 +108,17 @@ def test_the_strongest_control_is_two_flags_away():
   assert (config.freeze_decoder, config.squash_z, config.decoder_init) == (True, False, "random")
   args = cli.build_parser().parse_args(["train", "--preset", "set1-disco3-linear"])
   assert (commands.train_config(args).freeze_decoder, commands.train_config(args).squash_z) == (False, True)
+  # without --decoder-init the start follows the decoder asked for: a frozen decoder or
+  # full-action PPO from a preset that starts in the reward prior starts at random
+  args = cli.build_parser().parse_args(["train", "--preset", "set1-disco3-linear", "--freeze-decoder",
+                                        "yes", "--squash-z", "no"])
+  assert commands.train_config(args).decoder_init == "random"
+  args = cli.build_parser().parse_args(["train", "--tasks", "valve3", "--decoder", "identity",
+                                        "--synergies", "20", "--alpha2", "0", "--alpha3", "0"])
+  assert (commands.train_config(args).decoder, commands.train_config(args).decoder_init) == (
+      "identity", "random")
+  args = cli.build_parser().parse_args(["train", "--decoder-init", "physics"])
+  assert commands.train_config(args).decoder_init == "physics"
 
 
 def test_a_task_posture_without_a_decoder_is_one_line_and_nothing_made(tmp_path, capsys):

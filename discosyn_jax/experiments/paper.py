@@ -364,7 +364,7 @@ class Planner:
     return [step for step in (source, frozen, *controls, scratch) if step is not None]
 
   def plan(self, experiment: str) -> list:
-    if experiment in TABLES:  # one table's rows: a part of `all` that fits a session or two
+    if experiment in TABLES:  # one table's rows: a part of `all`, hours rather than a day on 2 cores
       task_set = TABLES[experiment]
       return select(self.plan(f"discosyn-{task_set}") + self.plan(f"baselines-{task_set}"),
                     PAPER_ROWS[task_set])

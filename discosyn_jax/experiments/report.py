@@ -11,9 +11,15 @@ Writes OUT/REPORT.md and PNG figures beside it:
   - t-SNE of the z the DiscoSyn policy picks, coloured by task (the paper's Fig. 6);
   - transfer to unseen tasks and the sparse goal valve: per method and task the final
     success, the mean over the curve, the env steps to the threshold, and for the sparse
-    valve the env steps to the first reward; curves.
+    valve the env steps to the first reward; curves;
+  - per task set (each of the above), intervals a reviewer can trust from a few seeds
+    (intervals.py, rliable): per method the IQM and the mean of the final success and of
+    the mean over the curve over runs x tasks, the probability that the set's default row
+    improves on it, each with its 95 % stratified bootstrap interval, and the performance
+    profiles; a fixed bootstrap seed makes them the same on every run.
 
-"Solved" is: the mean over seeds of the final evaluation's success >= `threshold`.
+"Solved" is: the mean over seeds of the final evaluation's success >= `threshold`, a
+threshold on a mean: the intervals say which differences the seeds support.
 A run's method and set come from its experiment.json (written by `discosyn experiment`), or
 else from its config. It reads a run's record where its checkpoints are not kept
 (discosyn_jax/experiments/record.py). The text is the same wherever and whenever it is made from the
@@ -31,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from discosyn_jax.run import layout, logs
-from discosyn_jax.experiments import record, report_figures
+from discosyn_jax.experiments import intervals, record, report_figures
 from discosyn_jax.experiments.presets import REWARDED
 from discosyn_jax.experiments.report_runs import Run, find, order
 from discosyn_jax import tasks
@@ -273,6 +279,130 @@ def frozen_table(group: list[Run], threshold: float, first_rewards: bool) -> str
   return "\n".join(lines) + "\n"
 
 
+# -- intervals ----------------------------------------------------------------------
+# the two scores of a run on a task: its final success, and its success averaged over every
+# evaluation of the run (how soon, not only how far)
+SCORES = {"final": "final success", "curve": "mean over the curve"}
+
+
+def score_matrices(runs: list[Run], task_names) -> dict[str, dict[str, np.ndarray]]:
+  """Per score and method, a runs x tasks matrix of success: every finished run that has
+  each task (an unfinished run's last evaluation is not its end)."""
+  matrices = {kind: {} for kind in SCORES}
+  for method in order({r.method for r in runs}):
+    group = sorted((r for r in runs if r.method == method and r.finished and r.evals
+                    and all(f"{t}/success" in r.final for t in task_names)), key=lambda r: r.seed)
+    if group:
+      matrices["final"][method] = np.array([[r.final[f"{t}/success"] for t in task_names]
+                                            for r in group])
+      matrices["curve"][method] = np.array([[_mean_success(r, [t], over_curve=True)
+                                             for t in task_names] for r in group])
+  return matrices
+
+
+def default_method(task_set: str, methods) -> str | None:
+  """The row the others are measured against: the set's default DiscoSyn row (for unseen
+  tasks and the sparse valve, that row's decoder frozen), else its first DiscoSyn row."""
+  from discosyn_jax.experiments import paper
+
+  source = paper.TRANSFER_FROM.get(task_set)
+  rows = paper.PAPER_ROWS.get(source[0] if source else task_set, ())
+  wanted = [rows[0] + (" frozen" if source else "")] if rows else []
+  found = [m for m in wanted + order(methods) if m in methods and m.startswith("DiscoSyn")]
+  return found[0] if found else None
+
+
+INTERVALS_TEXT = (
+    "*Intervals*, per set: a row per method over its finished runs (seeds), the interquartile "
+    "mean (IQM: the mean of the middle half of all runs x tasks scores) and the mean, of the "
+    "final success and of the mean success over the curve; and P(default > row), the "
+    "probability that a run of the set's default row (its DiscoSyn<b>-L-reward, frozen for "
+    "unseen tasks and the sparse valve) scores above a run of that row on a task, ties half, "
+    "averaged over tasks (Agarwal et al., NeurIPS 2021). Brackets: 95 % stratified bootstrap "
+    f"intervals (runs resampled within each task; rliable, {intervals.REPS:,} replications, "
+    f"seed {intervals.SEED}). *above* / *below*: the interval of P lies above / below 0.5; "
+    "else *not separated at n* seeds, with the seeds per row that would separate them if the "
+    "gap held: the interval's half-width towards 0.5 scaled by sqrt(n / n'). The profiles: "
+    "the fraction of runs x tasks above each success level, with its band, for the default, "
+    "PPO and the three rows of the highest final IQM.")
+
+
+def _interval(e: intervals.Estimate) -> str:
+  return f"{e.value:.2f} [{e.low:.2f}, {e.high:.2f}]"
+
+
+def _improvement_cell(p: intervals.Estimate, seeds: int) -> str:
+  """P(default > row) with its interval and where it stands; for a row not separated, the
+  seeds (per row) that would separate it if the gap held (intervals.seeds_to_separate)."""
+  where = intervals.verdict(p)
+  if where == "not separated":
+    needed = intervals.seeds_to_separate(p, seeds)
+    more = "no gap" if needed is None else "> 100 would" if needed > 100 else f"~{needed} would"
+    where += f" at {seeds} ({more})"
+  return f"{_interval(p)} {where}"
+
+
+def interval_table(matrices: dict[str, dict[str, np.ndarray]], default: str | None) -> str:
+  """A row per method: the runs, the IQM and the mean of each score with their intervals,
+  and the probability that the default improves on the row."""
+  head = ["method", "runs"] + [f"{name}: {stat}" for name in SCORES.values()
+                               for stat in ("IQM", "mean")]
+  head += [f"P({default} > row), {name}" for name in SCORES.values()] if default else []
+  lines = ["| " + " | ".join(head) + " |", "|---" * len(head) + "|"]
+  of = lambda method: {kind: matrices[kind][method] for kind in SCORES}
+  for method in matrices["final"]:
+    runs = len(matrices["final"][method])
+    cells = [method, str(runs)]
+    for middle, mean in intervals.aggregates(of(method)).values():
+      cells += [_interval(middle), _interval(mean)]
+    if default and method == default:
+      cells += ["(the default)"] * len(SCORES)
+    elif default:
+      seeds = min(runs, len(matrices["final"][default]))
+      found = intervals.probability_of_improvement(of(default), of(method))
+      cells += [_improvement_cell(p, seeds) for p in found.values()]
+    lines.append("| " + " | ".join(cells) + " |")
+  return "\n".join(lines) + "\n"
+
+
+def profile_rows(matrices: dict[str, dict[str, np.ndarray]], default: str | None,
+                 others: int = 3) -> list[str]:
+  """The rows a profile draws: the default, full-action PPO, and the `others` other rows of
+  the highest final IQM (every row of a set would hide the lines)."""
+  final = matrices["final"]
+  fixed = [m for m in (default, "PPO") if m in final]
+  rest = sorted((m for m in final if m not in fixed), key=lambda m: -intervals.iqm(final[m]))
+  chosen = set(fixed + rest[:others])
+  return [m for m in final if m in chosen]
+
+
+def interval_section(runs: list[Run], task_set: str, out: pathlib.Path) -> list[str]:
+  """A set's interval table and its performance-profile figure, as lines of the report."""
+  task_names = list(dict.fromkeys(t for r in runs for t in r.config.tasks))
+  matrices = score_matrices(runs, task_names)
+  if not matrices["final"]:
+    return []
+  default = default_method(task_set, matrices["final"])
+  name = figure_name("profile", task_set)
+  shown = profile_rows(matrices, default)
+  report_figures.profiles({m: {SCORES[k]: matrices[k][m] for k in SCORES} for m in shown},
+                          out / name, f"{task_set}: performance profiles")
+  labels = ", ".join(map(tasks.label, task_names))
+  return [f"### {task_set}: intervals over runs x tasks ({labels})", "",
+          interval_table(matrices, default), f"![profile {task_set}]({name})", ""]
+
+
+def improvement_of(runs: list[Run], task_set: str, x: str, y: str,
+                   task_names=None) -> dict[str, intervals.Estimate]:
+  """P(x > y) per score for any two rows of a set, over its tasks or `task_names` alone:
+  the comparisons the tables do not hold (two controls, one task, ...)."""
+  in_set = [r for r in runs if r.task_set == task_set]
+  task_names = task_names or list(dict.fromkeys(t for r in in_set for t in r.config.tasks))
+  matrices = score_matrices(in_set, task_names)
+  of = lambda method: {kind: matrices[kind][method] for kind in SCORES}
+  return intervals.probability_of_improvement(of(x), of(y))
+
+
 # -- figures ----------------------------------------------------------------------
 def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = True,
           force: bool = False, make_trainer=None) -> pathlib.Path:
@@ -312,7 +442,7 @@ def _write(runs, fits, paths, out: pathlib.Path, threshold: float, with_tsne: bo
            f"DiscoSyn<b>-L marks also beside today's default start, DiscoSyn<b>-L{REWARDED}). "
            "*mean*: each seed's success averaged over the set's tasks at the end, *over the "
            "curve*: the same averaged over every evaluation of the run; mean (min–max) over "
-           "seeds.", ""]
+           "seeds.", "", INTERVALS_TEXT, ""]
   scales = sorted({r.scale for r in runs if r.scale})
   if scales:
     lines += [f"Scales: {', '.join(scales)}.", ""]
@@ -320,6 +450,9 @@ def _write(runs, fits, paths, out: pathlib.Path, threshold: float, with_tsne: bo
   main = [r for r in runs if r.main]
   if main:
     lines += ["## Tasks solved", "", solved_tables(runs, threshold)]
+    lines += ["## Intervals over runs and tasks", ""]
+    for task_set in sorted({r.task_set for r in main}):
+      lines += interval_section([r for r in main if r.task_set == task_set], task_set, out)
   if fits:
     lines += ["## Explained variance of the action data", "",
               "PCA and autoencoder fitted to the deterministic actions of the independent "
@@ -384,6 +517,8 @@ def _write(runs, fits, paths, out: pathlib.Path, threshold: float, with_tsne: bo
               + (" and to the first reward seen in training" if experiment == "sparse" else "")
               + ": mean (min–max) [seeds that got there], and [seeds] that did not.", "",
               frozen_table(group, threshold, first_rewards=experiment == "sparse")]
+    for task_set in sorted({r.task_set for r in group}):
+      lines += interval_section([r for r in group if r.task_set == task_set], task_set, out)
     name = f"{experiment}.png"
     report_figures.curves(group, out / name, f"{heading}: deterministic evaluation success")
     lines += [f"![{experiment}]({name})", ""]

@@ -1,6 +1,6 @@
 """The figures of `discosyn report` (report.py): evaluation curves per method with their
-spread over seeds, the decoder's overlap curves, and the t-SNE of the z a DiscoSyn policy
-picks (the paper's Fig. 6)."""
+spread over seeds, the decoder's overlap curves, performance profiles with their intervals,
+and the t-SNE of the z a DiscoSyn policy picks (the paper's Fig. 6)."""
 
 from __future__ import annotations
 
@@ -91,6 +91,36 @@ def overlap_curves(runs: list[Run], path: pathlib.Path, title: str) -> pathlib.P
     ax.set_xlabel("env steps of the task")
     ax.set_ylabel("overlap")
     ax.set_ylim(0, 1.02)
+    ax.grid(alpha=0.3)
+  return _save(fig, axes, title, path)
+
+
+def profiles(scores: dict[str, dict[str, np.ndarray]], path: pathlib.Path, title: str,
+             levels: np.ndarray = np.linspace(0, 1, 101)) -> pathlib.Path:
+  """Performance profiles (intervals.py) of {method: {score: runs x tasks}}: a panel per
+  score, a line per method of the fraction of its runs x tasks above each success level,
+  the band its 95 % interval."""
+  import matplotlib
+
+  matplotlib.use("Agg")
+  import matplotlib.pyplot as plt
+
+  from discosyn_jax.experiments import intervals
+
+  names = list(next(iter(scores.values())))
+  fig, axes = plt.subplots(1, len(names), figsize=(5 * len(names), 3.6), squeeze=False)
+  for method, by_score in scores.items():
+    found = intervals.performance_profile(by_score, levels)
+    for ax, name in zip(axes[0], names):
+      profile, low, high = found[name]
+      line, = ax.plot(levels, profile, drawstyle="steps-post",
+                      label=f"{method} [{len(by_score[name])}]")
+      ax.fill_between(levels, low, high, step="post", color=line.get_color(), alpha=0.15)
+  for ax, name in zip(axes[0], names):
+    ax.set_title(name)
+    ax.set_xlabel("success level")
+    ax.set_ylabel("fraction of runs x tasks above it")
+    ax.set_ylim(-0.02, 1.02)
     ax.grid(alpha=0.3)
   return _save(fig, axes, title, path)
 

@@ -21,7 +21,6 @@ import jax
 
 from discosyn_jax import checks
 from discosyn_jax import config as config_lib
-from discosyn_jax import tasks
 from discosyn_jax.agent import networks
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.env.task import not_finite
@@ -279,7 +278,8 @@ def _check_finite(own_values: dict, metrics: dict, step: int) -> None:
   for name, values in own_values.items():
     bad = [part for part, finite in values.items() if not finite]
     if bad:
-      raise TaskNotFinite(not_finite(tasks.label(name), bad, f"at train step {step}") +
+      own = name.rpartition(":")[2]  # a task of one's own ("file.py:Slider") by its class
+      raise TaskNotFinite(not_finite(own, bad, f"at train step {step}") +
                           "; training stopped")
   if not metrics["finite"] or not math.isfinite(metrics["loss"]):
     raise TrainingDiverged(f"non-finite loss or parameters at step {step}; training stopped")
