@@ -131,6 +131,8 @@ def train_config(args, base=None):
     if changes["decoder"] != frozen["decoder"] or changes["n_synergies"] != frozen["n_synergies"]:
       raise UsageError(f"--decoder-from {args.decoder_from} holds a {frozen['decoder']} decoder "
                        f"with {frozen['n_synergies']} synergies; drop --decoder / --synergies")
+  if "decoder_init" not in changes and {"decoder", "freeze_decoder", "decoder_from"} & set(changes):
+    changes["decoder_init"] = "auto"  # the start follows the decoder asked for (config.py)
   return base.replace(**changes).validate()
 
 
