@@ -21,7 +21,10 @@ from discosyn_jax import atomic, checks
 DECODERS = ("linear", "mlp", "identity")
 # the priors a linear decoder may start from (decoder_init): what the pushed actions are read
 # by, and how the tasks' metrics make one subspace (discosyn_jax/synergies/priors.py)
-PRIORS = {"physics": ("objects", "trace"), "reward": ("reward", "share")}
+PRIORS = {"objects": ("objects", "trace"), "reward": ("reward", "share")}
+# a start's name in the files of older releases: the objects prior was "physics" until
+# 2026-12-05 (config files and synergy files are read with today's name)
+OLD_STARTS = {"physics": "objects"}
 DECODER_INITS = ("auto", "random", *PRIORS)
 # what q(.|a) reads back from an action: the head's z (the paper's), or the activation the
 # decoder read, tanh(z) where z is bounded (the same as z where it is not)
@@ -63,7 +66,7 @@ class TrainConfig:
   decoder_bias: bool = True  # linear decoder: a = W z + c rather than W z
   freeze_decoder: bool = False  # decoder parameters outside the optimiser
   # the start of a linear decoder: random (the paper's), or a prior, the same subspace for
-  # every seed, into which each seed's random decoder is turned (priors.py): physics,
+  # every seed, into which each seed's random decoder is turned (priors.py): objects,
   # the actions that move the tasks' objects most, pooled; reward, the actions that change
   # what each task rewards, each task its share of the directions in turn; auto: reward for
   # a linear decoder learned from scratch, random for any other (the config holds the start
@@ -230,6 +233,7 @@ class TrainConfig:
     missing = [name for name in fields if name not in values]
     if missing:
       raise ValueError(f"missing config field(s): {', '.join(missing)}")
+    values = {**values, "decoder_init": OLD_STARTS.get(values["decoder_init"], values["decoder_init"])}
     # JSON has no tuples
     return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in values.items()})
 

@@ -118,7 +118,7 @@ def valve3_on_both_backends():
 
 @pytest.fixture(autouse=True)
 def _a_cheap_physics_prior(monkeypatch):
-  """Runs that start from the physics prior (the quickstart's default) make it from 4
+  """Runs that start from a prior (the quickstart's default) make it from 4
   states per task here instead of 640 (test_priors.py tests the prior itself; a
   training in a subprocess makes the whole one)."""
   from discosyn_jax.synergies import priors

@@ -117,8 +117,8 @@ def test_the_strongest_control_is_two_flags_away():
                                         "--synergies", "20", "--alpha2", "0", "--alpha3", "0"])
   assert (commands.train_config(args).decoder, commands.train_config(args).decoder_init) == (
       "identity", "random")
-  args = cli.build_parser().parse_args(["train", "--decoder-init", "physics"])
-  assert commands.train_config(args).decoder_init == "physics"
+  args = cli.build_parser().parse_args(["train", "--decoder-init", "objects"])
+  assert commands.train_config(args).decoder_init == "objects"
 
 
 def test_a_task_posture_without_a_decoder_is_one_line_and_nothing_made(tmp_path, capsys):
@@ -132,7 +132,7 @@ def test_a_task_posture_without_a_decoder_is_one_line_and_nothing_made(tmp_path,
 
 @pytest.mark.parametrize("argv, line", [
     (["train", "--decoder-init", "bogus"], "discosyn train: error: argument --decoder-init: "
-     "invalid choice: 'bogus' (choose from 'auto', 'random', 'physics', 'reward')"),
+     "invalid choice: 'bogus' (choose from 'auto', 'random', 'objects', 'reward')"),
     (["train", "--discriminator-target", "a"], "discosyn train: error: argument "
      "--discriminator-target: invalid choice: 'a' (choose from 'z', 'activation')"),
     (["train", "--steps", "x"], "discosyn train: error: argument --steps: invalid int value: 'x'"),

@@ -38,7 +38,7 @@ def make_trainer(config):
 @pytest.fixture(scope="module", autouse=True)
 def paper_start():
   """The toy envs have no physics: the plans here start from the paper's random decoder
-  (the physics prior, the presets' start on the hand, is tested in test_priors.py)."""
+  (the priors, the presets' start on the hand, is tested in test_priors.py)."""
   with pytest.MonkeyPatch.context() as patch:
     patch.setattr(presets, "PRESETS", {name: config.replace(decoder_init="random")
                                        if config.decoder == "linear" else config
@@ -316,7 +316,7 @@ def test_report_mean_and_spread_over_seeds(tmp_path, method):
 
 def test_each_discosyn_row_stands_above_its_controls_todays_default_first():
   rows = ["PPO", "DiscoSyn3-L-reward", "Prior3-L-reward", "Random3-L-matched-reward",
-          "DiscoSyn3-L-prior", "Prior3-L", "DiscoSyn3-L", "Random3-L-matched", "Random3-L",
+          "DiscoSyn3-L-objects", "Prior3-L-objects", "DiscoSyn3-L", "Random3-L-matched", "Random3-L",
           "Random3-L-zfree", "DiscoSyn3-NL", "Random3-NL-zfree", "DiscoSyn4-L-reward",
           "DiscoSyn3-L frozen"]
   assert report_runs.order(set(rows)) == rows
@@ -436,7 +436,7 @@ def test_all_runs_every_row_of_the_papers_tables_once(tmp_path):
   shared = [s for plan in whole.values() for s in plan if s.name in by_name]
   assert all(by_name[s.name] == s for s in shared)
   # discosyn-set1 alone is every start and control tried
-  assert {"DiscoSyn3-L", "DiscoSyn3-L-prior", "Random3-L-matched-reward"} <= {
+  assert {"DiscoSyn3-L", "DiscoSyn3-L-objects", "Random3-L-matched-reward"} <= {
       s.meta["method"] for s in whole["discosyn-set1"]}
 
 

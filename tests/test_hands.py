@@ -192,11 +192,11 @@ def test_an_experiment_on_another_hand_names_its_folders_and_configs_after_it(tm
   from discosyn_jax.experiments import paper, report_runs
 
   steps = paper.Planner(tmp_path, "cpu", 0, hand="leap16").plan("discosyn-set1")
-  assert "discosyn3-l-prior-set1-leap16-seed0" in {s.name for s in steps}
+  assert "discosyn3-l-objects-set1-leap16-seed0" in {s.name for s in steps}
   assert all(s.name.endswith("-leap16-seed0") for s in steps)
   assert {s.config.hand for s in steps if hasattr(s, "config")} == {"leap16"}
   ours = paper.Planner(tmp_path, "cpu", 0).plan("discosyn-set1")
-  assert "discosyn3-l-prior-set1-seed0" in {s.name for s in ours}
+  assert "discosyn3-l-objects-set1-seed0" in {s.name for s in ours}
   assert {s.config.hand for s in ours if hasattr(s, "config")} == {"shadow20"}
   # the report's chance level and initial decoders use the run's own action size
   assert report_runs.action_size("valve3", "leap16") == 16

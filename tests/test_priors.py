@@ -70,9 +70,9 @@ def test_every_seed_of_a_run_starts_in_the_same_subspace_and_only_there():
 
 
 def test_the_prior_is_refused_where_it_cannot_start_the_decoder():
-  config = presets.preset("set1-disco3-linear-prior")
-  assert fitting.method_name(config) == "DiscoSyn3-L-prior"
-  assert fitting.method_name(config.replace(freeze_decoder=True)) == "Prior3-L"
+  config = presets.preset("set1-disco3-linear-objects")
+  assert fitting.method_name(config) == "DiscoSyn3-L-objects"
+  assert fitting.method_name(config.replace(freeze_decoder=True)) == "Prior3-L-objects"
   default = presets.preset("set1-disco3-linear")  # the reward prior, every linear preset's start
   assert {presets.preset(f"set{n}-disco{b}-linear").decoder_init
           for n, b in ((1, 3), (1, 4), (2, 4), (2, 6))} == {"reward"}
@@ -90,7 +90,7 @@ def test_the_prior_is_refused_where_it_cannot_start_the_decoder():
                                           alpha3=0.0), dict(freeze_decoder=True),
                 dict(decoder_from="x.npz")):
     assert config_lib.TrainConfig(**other).decoder_init == "random", other
-  assert config_lib.TrainConfig(decoder_init="physics").decoder_init == "physics"
+  assert config_lib.TrainConfig(decoder_init="objects").decoder_init == "objects"
   saved = config_lib.TrainConfig().to_dict()  # a config file names the start it ran
   assert saved["decoder_init"] == "reward" and config_lib.TrainConfig.from_dict(saved).validate()
   with pytest.raises(ValueError, match="needs hand tasks"):

@@ -377,11 +377,11 @@ class Planner:
     if experiment.startswith("discosyn-") and experiment[9:] in DISCOSYN_SIZES:
       task_set = experiment[9:]
       # the decayed variant where it is measured to work (docs/TRAINING_NOTES.md)
-      # on the hand's sets both starts of the linear decoder, the paper's and the physics
+      # on the hand's sets both starts of the linear decoder, the paper's and the objects
       # prior's; on the test bed the paper's and the decayed variant (measured to work there)
       kinds = ((("linear", ""), ("mlp", ""), ("linear", presets.DECAYED))
                if task_set in presets.DECAYED_SETS else
-               (("linear", presets.PAPER), ("mlp", ""), ("linear", presets.PRIORED),
+               (("linear", presets.PAPER), ("mlp", ""), ("linear", presets.OBJECTS_SUFFIX),
                 ("linear", presets.REWARDED)))
       runs = [self.discosyn(task_set, b, kind, variant) for b in DISCOSYN_SIZES[task_set]
               for kind, variant in kinds]

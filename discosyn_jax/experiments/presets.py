@@ -5,7 +5,7 @@ import, not in the middle of a run. The paper's runs (Tables I and II) are here 
 `<set>-disco<b>-<linear|mlp>` and `<set>-ppo`; discosyn_jax/experiments/paper.py runs them at a scale.
 The linear DiscoSyn presets start every seed's decoder from the reward prior (one synergy
 space from every seed: set #1 5 seeds, set #2 3 seeds, docs/TRAINING_NOTES.md);
-`<set>-disco<b>-linear-reward`, `-prior` (the object-motion prior) and `-paper` (the paper's
+`<set>-disco<b>-linear-reward`, `-objects` (the objects prior) and `-paper` (the paper's
 random start) name each start on every set.
 """
 
@@ -28,14 +28,14 @@ DECAYED = "-decay"
 # (set #1) it shrank the decoder until the valves failed (success 0.06-0.16), so there it is
 # a preset to try, not a row of the tables
 DECAYED_SETS = ("planted", "planted_slack")
-# the object-motion prior: every seed's decoder starts in the subspace of the actions that
-# move the objects most (discosyn_jax/synergies/priors.py); `<preset>-prior`, and
+# the objects prior: every seed's decoder starts in the subspace of the actions that
+# move the objects most (discosyn_jax/synergies/priors.py); `<preset>-objects`, and
 # `<preset>-paper` for the paper's random start
-PRIOR = dict(decoder_init="physics")
-PRIORED, PAPER = "-prior", "-paper"
+OBJECTS = dict(decoder_init="objects")
+OBJECTS_SUFFIX, PAPER = "-objects", "-paper"
 # the task-aware prior, the start of every linear DiscoSyn preset: the actions that change what
 # each task rewards, each task its share of the directions in turn (priors.py); as
-# good as the object-motion prior on set #1 (5 seeds) and set #2 (3 seeds), and it keeps what
+# good as the objects prior on set #1 (5 seeds) and set #2 (3 seeds), and it keeps what
 # a task rewards where other motion is larger; `<preset>-reward`
 REWARD = dict(decoder_init="reward")
 REWARDED = "-reward"
@@ -70,7 +70,7 @@ for _set, _sizes in (("set1", (3, 4)), ("set2", (4, 6))):
                                                         **CPU_RUN)
     _paper = PRESETS[f"{_set}-disco{_b}-linear"]
     PRESETS[f"{_set}-disco{_b}-linear{PAPER}"] = _paper
-    PRESETS[f"{_set}-disco{_b}-linear{PRIORED}"] = _paper.replace(**PRIOR)
+    PRESETS[f"{_set}-disco{_b}-linear{OBJECTS_SUFFIX}"] = _paper.replace(**OBJECTS)
     PRESETS[f"{_set}-disco{_b}-linear{REWARDED}"] = _paper.replace(**REWARD)
     PRESETS[f"{_set}-disco{_b}-linear{DECAYED}"] = _paper.replace(**DECAY)
     PRESETS[f"{_set}-disco{_b}-linear"] = _paper.replace(**REWARD)

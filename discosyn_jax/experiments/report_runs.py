@@ -13,7 +13,7 @@ from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import hands
 from discosyn_jax.run import layout, logs
 from discosyn_jax.experiments import record
-from discosyn_jax.experiments.presets import DECAY, PRIORED, REWARDED
+from discosyn_jax.experiments.presets import DECAY, OBJECTS_SUFFIX, REWARDED
 from discosyn_jax import tasks
 from discosyn_jax.tasks import TASK_SETS
 
@@ -24,7 +24,7 @@ for _b in (3, 4, 6):
   # today's default start (the reward prior) first, then the object prior's, the paper's
   # random start and its decayed update; then the random decoder frozen, every start's
   # control (z bounded, z free); the same for the mlp decoder
-  for _start, _frozen in ((REWARDED, f"Prior{_b}-L{REWARDED}"), (PRIORED, f"Prior{_b}-L"),
+  for _start, _frozen in ((REWARDED, f"Prior{_b}-L{REWARDED}"), (OBJECTS_SUFFIX, f"Prior{_b}-L{OBJECTS_SUFFIX}"),
                           ("", None), (_DECAYED, None)):
     METHOD_ORDER += (f"DiscoSyn{_b}-L{_start}",) + ((_frozen,) if _frozen else ()) + (
         f"Random{_b}-L-matched{_start}",)

@@ -1,2 +1,2 @@
-"""Synergies: PCA / autoencoder fits and synergy files, the physics prior a decoder starts
+"""Synergies: PCA / autoencoder fits and synergy files, the priors a decoder starts
 from, the cross-seed overlap of learned subspaces, and the decoder's movement."""

@@ -30,7 +30,7 @@ def learned_basis(run_dir: pathlib.Path) -> np.ndarray | None:
 
 def initial_basis(config: TrainConfig, action_size: int) -> np.ndarray | None:
   """The synergy basis a run of `config` (on envs of `action_size` actions) starts from; None
-  when its decoder_from is gone, or for a start from the physics prior (the same subspace
+  when its decoder_from is gone, or for a start from a prior (the same subspace
   for every seed, by construction)."""
   if config.decoder_init in PRIORS:  # the prior needs the envs; every seed starts in it
     return None

@@ -29,6 +29,7 @@ import numpy as np
 import optax
 
 from discosyn_jax.agent import networks
+from discosyn_jax.config import OLD_STARTS
 
 ARCHITECTURE = ("decoder", "n_synergies", "decoder_bias", "decoder_hidden", "squash_z")
 _DEFAULTS = {"squash_z": False}  # fields added since the first synergy files were written
@@ -285,20 +286,20 @@ def method_name(meta) -> str:
   'Random3-L' for the control (a decoder frozen at its random initialisation), and
   'DiscoSyn3-L-wd3' for a decoder learned with weight decay 3 (a tie-breaker),
   'DiscoSyn3-L-wd8a200' for one whose decay falls to nothing over 200 train steps;
-  'DiscoSyn3-L-prior' for one started from the physics prior, 'Prior3-L' for that start
-  frozen; 'DiscoSyn3-L-reward' and 'Prior3-L-reward' for the reward prior's.
+  'DiscoSyn3-L-objects' for one started from the objects prior, 'Prior3-L-objects' for that
+  start frozen; 'DiscoSyn3-L-reward' and 'Prior3-L-reward' for the reward prior's.
   `meta` is a synergy file's meta, or anything with the ARCHITECTURE fields (a config)."""
   get = meta.get if isinstance(meta, dict) else lambda k, d=None: getattr(meta, k, d)
   if get("method"):
     return f"{get('method')}{get('n_synergies')}"
   # a config whose decoder is frozen at its own start: DiscoSyn's controls, Random or Prior
-  init = get("decoder_init", "random")
+  init = OLD_STARTS.get(get("decoder_init", "random"), get("decoder_init", "random"))
   kind = "DiscoSyn"
   if get("freeze_decoder") and not get("decoder_from"):
     kind = "Random" if init == "random" else "Prior"
   name = f"{kind}{get('n_synergies')}-{'L' if get('decoder') == 'linear' else 'NL'}"
-  if init != "random" and (kind, init) != ("Prior", "physics"):
-    name += "-prior" if init == "physics" else f"-{init}"
+  if init != "random":  # the start, named as decoder_init names it
+    name += f"-{init}"
   decay = 0 if get("freeze_decoder") else get("decoder_weight_decay")  # frozen: never applied
   if not decay:
     return name

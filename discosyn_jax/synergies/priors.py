@@ -35,11 +35,11 @@ CHUNK = 64  # states whose pushes are stepped at once (bounds the memory of MJX 
 def _object_dofs(env) -> list[int]:
   """The qvel addresses of what is not the hand; ValueError where there is nothing to move."""
   if not hasattr(env, "mj_model"):
-    raise ValueError(f"the physics prior needs hand tasks; {type(env).__name__} has no physics")
+    raise ValueError(f"a prior needs hand tasks; {type(env).__name__} has no physics")
   hand_v = set(hands.qvel_indices(env.mj_model).tolist())
   dofs = [i for i in range(env.mj_model.nv) if i not in hand_v]
   if not dofs:
-    raise ValueError(f"the physics prior needs objects that move: {type(env.task).__name__}'s "
+    raise ValueError(f"the objects prior needs objects that move: {type(env.task).__name__}'s "
                      "scene has none")
   return dofs
 
