@@ -104,6 +104,8 @@ TRAIN_FLAGS = {
     "decoder_weight_decay_steps": "decoder_weight_decay_steps",
     "decoder_init": "decoder_init", "freeze_decoder": "freeze_decoder", "squash_z": "squash_z",
     "discriminator_target": "discriminator_target", "task_posture": "task_posture",
+    "residual": "residual", "residual_ramp_steps": "residual_ramp_steps",
+    "residual_start_steps": "residual_start_steps",
 }
 
 

@@ -47,7 +47,9 @@ MAX_STEPS = 2**31 - 1  # the state counts train steps in an int32
 # `discosyn upgrade RUN` writes these values into it (upgrade below).
 ADDED = {"squash_z": False, "physics": "reference", "reset_pool": False, "decoder_weight_decay": 0.0,
          "decoder_weight_decay_steps": 0, "hand": "shadow20",
-         "decoder_init": "random", "discriminator_target": "z", "task_posture": False}
+         "decoder_init": "random", "discriminator_target": "z", "task_posture": False,
+         "residual": 0.0, "residual_ramp_steps": 0, "residual_start_steps": 0,
+         "init_residual_std": 0.05}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -98,6 +100,19 @@ class TrainConfig:
   # constant): the tie is broken by the decay integrated early, and a decay still on at the
   # end costs the decoder its reach (docs/TRAINING_NOTES.md); a resumed run keeps its schedule
   decoder_weight_decay_steps: int = 0
+  # -- a residual beside the synergies (discosyn_jax/agent/residual.py) --
+  # the cap of the residual's weight rho: each task's head also picks a full-action residual
+  # r (its mean bounded to [-1, 1]) and the action is the synergies' plus rho r, for motion
+  # outside the synergy space; 0-1 (0: no residual, no parameters, no draws)
+  residual: float = 0.0
+  # rho rises linearly from 0 to its cap over this many train steps, so that the residual
+  # does not cost the synergies' start (0: the cap from the first step)
+  residual_ramp_steps: int = 0
+  # rho is held at 0 for this many train steps before its ramp (0: the ramp starts at once)
+  residual_start_steps: int = 0
+  # initial std of the residual's own noise (small: the residual explores with the
+  # decoder's noise, integrated over r)
+  init_residual_std: float = 0.05
   # -- the extended reward, paper Eq. 2: alpha1 H(pi(z|s,n)) + alpha2 log q(z|a) + alpha3 H(p(a|z)) --
   alpha1: float = 1e-3  # weight of the entropy bonus H(pi(z|s,n)) in the loss
   # weight of the discriminator reward log q(z|a), added to the reward of every control step
@@ -203,7 +218,8 @@ class TrainConfig:
     if self.steps > MAX_STEPS:
       raise ValueError(f"steps must be at most {MAX_STEPS}, not {self.steps}")
     for name in ("eval_every", "checkpoint_every", "alpha1", "alpha2", "alpha3", "value_coef",
-                 "decoder_weight_decay", "decoder_weight_decay_steps"):
+                 "decoder_weight_decay", "decoder_weight_decay_steps", "residual_ramp_steps",
+                 "residual_start_steps"):
       if getattr(self, name) < 0:
         raise ValueError(f"{name} must not be negative, not {getattr(self, name)}")
     for name in ("policy_hidden", "value_hidden", "decoder_hidden", "discriminator_hidden"):
@@ -215,11 +231,27 @@ class TrainConfig:
                        f"{self.num_minibatches} minibatches")
     if not 0 < self.discount <= 1 or not 0 <= self.gae_lambda <= 1:
       raise ValueError("discount must be in (0, 1] and gae_lambda in [0, 1]")
-    for name in ("init_z_std", "init_action_std", "learning_rate", "discriminator_learning_rate",
-                 "clip_epsilon", "max_grad_norm", "reward_scaling"):
+    for name in ("init_z_std", "init_action_std", "init_residual_std", "learning_rate",
+                 "discriminator_learning_rate", "clip_epsilon", "max_grad_norm", "reward_scaling"):
       if getattr(self, name) <= 0:
         raise ValueError(f"{name} must be positive, not {getattr(self, name)}")
+    self._check_residual()
     return self
+
+  def _check_residual(self) -> None:
+    if not 0 <= self.residual <= 1:
+      raise ValueError(f"residual (the cap of the residual's weight) must be between 0 and 1, "
+                       f"not {self.residual}")
+    if not self.residual:
+      if self.residual_ramp_steps or self.residual_start_steps:
+        raise ValueError("residual_ramp_steps and residual_start_steps schedule a residual: "
+                         "set residual")
+    elif self.decoder == "identity":
+      raise ValueError("the identity decoder (full-action PPO) has no room for a residual: its "
+                       "heads choose every action; set residual = 0")
+    elif not self.decoder_noise:
+      raise ValueError("a residual explores with the decoder's noise: a noiseless decoder "
+                       "(decoder_noise false) leaves it none; set residual = 0")
 
   def to_dict(self) -> dict[str, Any]:
     return dataclasses.asdict(self)

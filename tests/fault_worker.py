@@ -219,15 +219,15 @@ def main() -> int:
     except checkpoints.SaveFailed as err:
       print(f"save failed: {err}", file=sys.stderr)
       return 2
-  import discosyn_jax.tasks.registry
   from discosyn import cli
   from discosyn_jax.experiments import presets
+  from discosyn_jax.tasks import registry as task_registry
 
-  tasks.registry.make_envs = toy_envs
+  task_registry.make_envs = toy_envs
   if mode == "library":
     return library(pathlib.Path(args[0]))
   if os.environ.get("FAULT_PHYSICS") or os.environ.get("FAULT_STOP_IN_PHYSICS"):
-    tasks.registry.make_envs = physics_envs
+    task_registry.make_envs = physics_envs
   if os.environ.get("FAULT_STOP_IN_PHYSICS"):
     stop_in_physics(os.environ["FAULT_STOP_IN_PHYSICS"])
   if os.environ.get("FAULT_STOP_IN_FINALIZER"):

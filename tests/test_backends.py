@@ -80,6 +80,8 @@ def test_the_mjx_implementation_is_chosen_by_name_and_checked(monkeypatch):
     mjx_backend.default_impl()
   monkeypatch.setenv("DISCOSYN_MJX_IMPL", "jax")
   assert mjx_backend.default_impl() == "jax"
+  monkeypatch.delenv("DISCOSYN_MJX_IMPL")  # unset: JAX's, whatever is installed (Warp is asked for)
+  assert mjx_backend.default_impl() == "jax"
   if importlib.util.find_spec("mujoco_warp") is None:
     monkeypatch.setenv("DISCOSYN_MJX_IMPL", "warp")
     with pytest.raises(ValueError, match="needs mujoco_warp"):

@@ -33,9 +33,9 @@ def steps():
     seen.update(traj=traj, last_obs=env_state.obs)
     return env_state, traj
 
-  def spy_update(params, opt_state, samples, key):
+  def spy_update(params, opt_state, samples, key, *rest):  # rest: the residual's weight
     seen["samples"] = samples[0]
-    return update(params, opt_state, samples, key)
+    return update(params, opt_state, samples, key, *rest)
 
   trainer._unroll, trainer._update = spy_unroll, spy_update
   # the spies' values are tracers of this very trace, so the jitted step can return them

@@ -6,6 +6,9 @@ the discriminator.
   p(a | z)     = N(D(z), sigma_phi)          shared by all tasks; D linear (b x 20) or an MLP;
                                              its mean D(z) is the action at evaluation
   q(z | a)     = N(m(a), sigma_psi)          the discriminator
+  pi(r | s, n) = N(tanh(m_n(s)), sigma_r)    with `residual` on: a full-action residual per
+                                             task, added to the action with a scheduled
+                                             weight (residual.py says what it does to Eq. 2)
 
 All standard deviations are learned and state-independent. The identity decoder (full-action
 PPO) has no parameters and no noise: a = z. With `decoder_noise` off the decoder acts with
@@ -92,12 +95,14 @@ class DiscoSyn(nn.Module):
   squash_z: bool = False
   discriminator_target: str = "z"  # config.DISCRIMINATOR_TARGETS
   task_posture: bool = False  # a learned posture per task, added to the decoder's mean
+  residual: bool = False  # a full-action residual head per task (residual.py)
   policy_hidden: tuple[int, ...] = (128, 128)
   value_hidden: tuple[int, ...] = (128, 128)
   decoder_hidden: tuple[int, ...] = (128, 128)
   discriminator_hidden: tuple[int, ...] = (128, 128)
   init_z_std: float = 1.0
   init_action_std: float = 0.3
+  init_residual_std: float = 0.05
 
   def setup(self):
     b = self.n_synergies
@@ -118,6 +123,9 @@ class DiscoSyn(nn.Module):
       # not the differences between the tasks' postures
       self.postures = self.param("postures", nn.initializers.zeros,
                                  (len(self.obs_sizes), self.action_size))
+    if self.residual:  # beside the z heads, not sharing their layers: z's are as without it
+      self.residuals = [GaussianHead(self.policy_hidden, self.action_size, self.init_residual_std)
+                        for _ in self.obs_sizes]
 
   @property
   def has_discriminator(self) -> bool:
@@ -126,6 +134,12 @@ class DiscoSyn(nn.Module):
   def policy(self, task: int, obs):
     """(mean, log_std) of pi(z | s, task)."""
     return self.heads[task](obs)
+
+  def residual_policy(self, task: int, obs):
+    """(mean, log_std) of pi(r | s, task): the mean bounded to [-1, 1], so that the weight's
+    cap bounds what the residual carries."""
+    mean, log_std = self.residuals[task](obs)
+    return jnp.tanh(mean), log_std
 
   def value(self, task: int, obs):
     return self.values[task](obs)[..., 0]
@@ -162,6 +176,8 @@ class DiscoSyn(nn.Module):
       z, _ = self.policy(n, obs)
       a, _ = self.act(n, z)
       out.append((z, self.value(n, obs), a))
+      if self.residual:
+        self.residual_policy(n, obs)
       if self.has_discriminator:
         self.discriminate(a)
     return out
@@ -174,17 +190,19 @@ def build(config, obs_sizes: Sequence[int], action_size: int) -> DiscoSyn:
       obs_sizes=tuple(int(s) for s in obs_sizes), n_synergies=b, action_size=action_size,
       decoder=config.decoder, decoder_bias=config.decoder_bias, decoder_noise=config.decoder_noise,
       squash_z=config.squash_z, discriminator_target=config.discriminator_target,
-      task_posture=config.task_posture,
+      task_posture=config.task_posture, residual=bool(config.residual),
       policy_hidden=tuple(config.policy_hidden), value_hidden=tuple(config.value_hidden),
       decoder_hidden=tuple(config.decoder_hidden),
       discriminator_hidden=tuple(config.discriminator_hidden),
-      init_z_std=config.init_z_std, init_action_std=config.init_action_std)
+      init_z_std=config.init_z_std, init_action_std=config.init_action_std,
+      init_residual_std=config.init_residual_std)
 
 
 # Top-level parameter collections by role: the optimiser labels them (ppo.optimizer), the
 # gradient norms are logged per role (train.py).
 def role(name: str) -> str:
-  if name.startswith("heads_") or name == "postures":  # a posture is its task's
+  # a posture and a residual head are their task's
+  if name.startswith(("heads_", "residuals_")) or name == "postures":
     return "heads"
   if name.startswith("values_"):
     return "values"

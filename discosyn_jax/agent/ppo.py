@@ -15,7 +15,9 @@ Where each term of the extended reward (paper, Eq. 2) goes:
                         the loss term, which PPO's entropy bonus follows (the usual practice;
                         the 1 / (1 - gamma) factor is absorbed into alpha).
 The PPO probability ratio uses log pi(a, z | s, n) = log pi(z | s, n) + log p(a | z): each
-sample goes through its own task's head and every sample through the one decoder.
+sample goes through its own task's head and every sample through the one decoder. With a
+residual (residual.py) p(a | z) is the decoder's Gaussian moved by rho times the residual's
+mean, r integrated out; the residual's entropy is in no bonus.
 """
 
 from __future__ import annotations
@@ -49,8 +51,9 @@ def discriminator_log_prob(model: DiscoSyn, params, z, action):
   return gaussian_log_prob(model.apply(params, z, method=DiscoSyn.discriminated), mean, log_std)
 
 
-def task_loss(model: DiscoSyn, params, task: int, s: Samples, config: TrainConfig):
-  log_prob, z_log_std, a_log_std = policy.log_prob(model, params, task, s.obs, s.z, s.action)
+def task_loss(model: DiscoSyn, params, task: int, s: Samples, config: TrainConfig, rho=None):
+  log_prob, z_log_std, a_log_std = policy.log_prob(model, params, task, s.obs, s.z, s.action,
+                                                   rho)
   ratio = jnp.exp(log_prob - s.log_prob)
   adv = (s.advantage - s.advantage.mean()) / (s.advantage.std() + 1e-8)
   clipped = jnp.clip(ratio, 1 - config.clip_epsilon, 1 + config.clip_epsilon)
@@ -65,12 +68,13 @@ def task_loss(model: DiscoSyn, params, task: int, s: Samples, config: TrainConfi
   return loss, metrics, a_log_std
 
 
-def loss(params, model: DiscoSyn, samples: Sequence[Samples], config: TrainConfig):
+def loss(params, model: DiscoSyn, samples: Sequence[Samples], config: TrainConfig, rho=None):
   """The whole minibatch: the mean over tasks of their PPO losses, the decoder's entropy
-  bonus, and (on disjoint parameters) the discriminator's negative log-likelihood."""
+  bonus, and (on disjoint parameters) the discriminator's negative log-likelihood. `rho`:
+  the residual's weight the samples were drawn with, with a residual."""
   total, per_task = 0.0, []
   for task, s in enumerate(samples):
-    task_total, metrics, a_log_std = task_loss(model, params, task, s, config)
+    task_total, metrics, a_log_std = task_loss(model, params, task, s, config, rho)
     total += task_total / len(samples)
     per_task.append(metrics)
   shared: dict[str, Any] = {}

@@ -283,7 +283,8 @@ class Planner:
   def zfree(self, random: Train, name: str = "") -> Train:
     """The control `random` with z free (the stronger of the two): the same frozen decoder,
     the heads' z unbounded; in folder `name`, else in its method's."""
-    method = f"{random.meta['method']}-zfree"
+    residual = fitting.residual_suffix(random.config)  # a residual's name stays last
+    method = f"{random.meta['method'].removesuffix(residual)}-zfree{residual}"
     return Train(name or self._folder(method, random.meta["set"]),
                  random.config.replace(squash_z=False).validate(), {**random.meta, "method": method})
 
@@ -302,7 +303,8 @@ class Planner:
     if learned.config.decoder == "linear":
       # named after the learned run it copies: Random3-L-matched, Random3-L-matched-wd8a200
       update = learned.meta["method"].removeprefix(f"DiscoSyn{learned.config.n_synergies}-L")
-      method = f"{random.meta['method']}-matched{update}"
+      residual = fitting.residual_suffix(learned.config)  # in `update` already, kept last
+      method = f"{random.meta['method'].removesuffix(residual)}-matched{update}"
       match = Match(self._folder(f"{method}-decoder", task_set), learned.name, meta("fit"))
       path = (self.out / match.name / Match.FILE).resolve()
       steps += [match, Train(self._folder(method, task_set),
@@ -382,7 +384,7 @@ class Planner:
       kinds = ((("linear", ""), ("mlp", ""), ("linear", presets.DECAYED))
                if task_set in presets.DECAYED_SETS else
                (("linear", presets.PAPER), ("mlp", ""), ("linear", presets.OBJECTS_SUFFIX),
-                ("linear", presets.REWARDED)))
+                ("linear", presets.REWARDED), ("linear", presets.RESIDUAL_SUFFIX)))
       runs = [self.discosyn(task_set, b, kind, variant) for b in DISCOSYN_SIZES[task_set]
               for kind, variant in kinds]
       steps = [step for run in runs for step in (run, *self.controls(run, task_set, experiment))]

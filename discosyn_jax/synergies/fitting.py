@@ -287,7 +287,8 @@ def method_name(meta) -> str:
   'DiscoSyn3-L-wd3' for a decoder learned with weight decay 3 (a tie-breaker),
   'DiscoSyn3-L-wd8a200' for one whose decay falls to nothing over 200 train steps;
   'DiscoSyn3-L-objects' for one started from the objects prior, 'Prior3-L-objects' for that
-  start frozen; 'DiscoSyn3-L-reward' and 'Prior3-L-reward' for the reward prior's.
+  start frozen; 'DiscoSyn3-L-reward' and 'Prior3-L-reward' for the reward prior's; a
+  residual beside the synergies last (residual_suffix): 'DiscoSyn3-L-reward-res0.3r75'.
   `meta` is a synergy file's meta, or anything with the ARCHITECTURE fields (a config)."""
   get = meta.get if isinstance(meta, dict) else lambda k, d=None: getattr(meta, k, d)
   if get("method"):
@@ -301,10 +302,21 @@ def method_name(meta) -> str:
   if init != "random":  # the start, named as decoder_init names it
     name += f"-{init}"
   decay = 0 if get("freeze_decoder") else get("decoder_weight_decay")  # frozen: never applied
-  if not decay:
-    return name
-  anneal = get("decoder_weight_decay_steps", 0)
-  return f"{name}-wd{decay:g}" + (f"a{anneal}" if anneal else "")
+  if decay:
+    anneal = get("decoder_weight_decay_steps", 0)
+    name += f"-wd{decay:g}" + (f"a{anneal}" if anneal else "")
+  return name + residual_suffix(meta)
+
+
+def residual_suffix(meta) -> str:
+  """A residual's part of a method's name: '-res' and its cap, 'r' its ramp and 's' its
+  start in train steps where set ('-res0.3r75'); '' without a residual (agent/residual.py)."""
+  get = meta.get if isinstance(meta, dict) else lambda k, d=None: getattr(meta, k, d)
+  cap = get("residual", 0.0) or 0.0
+  if not cap:
+    return ""
+  ramp, start = get("residual_ramp_steps", 0), get("residual_start_steps", 0)
+  return f"-res{cap:g}" + (f"r{ramp}" if ramp else "") + (f"s{start}" if start else "")
 
 
 def frozen_fields(meta: dict[str, Any], path) -> dict[str, Any]:

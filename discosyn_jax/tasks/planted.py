@@ -18,6 +18,12 @@ With `slack` only the part of e inside the planted span counts (e -> U U^T e): m
 outside it is free, so every decoder whose subspace projects onto the whole span is
 adequate, as on the hand, where many subspaces turn the valves. Without slack the one
 adequate subspace of `rank` dimensions is the span itself.
+
+With `outside` > 0 part of each target lies outside the span: a* = s U A_n u + s outside
+u_1 w_n, w_n a unit direction orthogonal to the span, the task's own (u_1 the goal's first
+coordinate, s keeping |a*| <= 0.9). No decoder of the span, and no constant posture, reaches
+it: the motion a residual beside the synergies is for (agent/residual.py). Its share of the
+target's power is outside^2 / (task_rank + outside^2).
 """
 
 from __future__ import annotations
@@ -45,6 +51,9 @@ class PlantedConfig:
   slack: bool = False  # only the error inside the planted span counts
   episode_length: int = 10  # steps per episode; the goal is fixed for an episode
   tolerance: float = 0.25  # success: counted error below this fraction of a typical target
+  # the part of each target outside the span, relative to one goal coordinate's part inside
+  # (0: every target inside the span)
+  outside: float = 0.0
   span_seed: int = SPAN_SEED
 
   def __post_init__(self):
@@ -56,6 +65,11 @@ class PlantedConfig:
     if self.index < 0 or self.episode_length < 1 or self.tolerance <= 0:
       raise ValueError("index must not be negative, episode_length must be at least 1 and "
                        "tolerance positive")
+    if self.outside < 0:
+      raise ValueError(f"outside must not be negative, not {self.outside}")
+    if self.outside and self.slack:
+      raise ValueError("with slack the error outside the span counts for nothing: a target "
+                       "outside it (outside > 0) would ask for nothing")
 
 
 def default_config(**overrides) -> PlantedConfig:
@@ -76,6 +90,14 @@ def task_plane(config: PlantedConfig) -> np.ndarray:
   return (span(config.rank, config.span_seed) @ rotation[:, :config.task_rank]).astype(np.float32)
 
 
+def outside_direction(config: PlantedConfig) -> np.ndarray:
+  """(20,): task `index`'s unit direction orthogonal to the planted span."""
+  u = span(config.rank, config.span_seed)
+  w = np.random.default_rng((config.span_seed, config.index, 1)).normal(size=ACTION_SIZE)
+  w = w - u @ (u.T @ w)
+  return (w / np.linalg.norm(w)).astype(np.float32)
+
+
 class PlantedEnv(Env):
   """One planted task with Brax's Env interface (module docstring); `backend` and `hand` are
   accepted and ignored: there is no physics and no hand."""
@@ -86,6 +108,9 @@ class PlantedEnv(Env):
     self.episode_length = config.episode_length
     self.planted_span = span(config.rank, config.span_seed)  # what the decoder should find
     plane = task_plane(config)
+    if config.outside:  # the first goal coordinate also moves the target off the span
+      plane = plane.copy()
+      plane[:, 0] += config.outside * outside_direction(config)
     # the largest |a*_i| over the goal box is sum_j |plane_ij|
     self._targets = jnp.asarray(plane * (MAX_TARGET / np.abs(plane).sum(axis=1).max()))
     # E|a*|^2 for u ~ U[-1, 1]^k: the columns of _targets are orthogonal, each u_j has variance 1/3

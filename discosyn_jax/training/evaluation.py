@@ -9,17 +9,20 @@ import jax
 import jax.numpy as jnp
 
 
-def episodes(trainer, params, normalizers, key, task: int, episodes: int, keep_states: bool = False):
+def episodes(trainer, params, normalizers, key, task: int, episodes: int, keep_states: bool = False,
+             at_step=None):
   """`episodes` deterministic episodes of one task, in parallel: per step z, action, reward
   and `alive` (1 until the episode's end, that step included), and the env state after the
-  step when `keep_states` (videos); per episode its return and final success."""
+  step when `keep_states` (videos); per episode its return and final success. `at_step`:
+  the train step whose residual weight the policy acts with (with a residual; None: its cap)."""
   env = trainer.eval_envs[task]
   state = env.reset(jax.random.split(key, episodes))
   zeros = jnp.zeros(episodes)
 
   def step(carry, _):
     state, alive, ret, success = carry
-    z, a, _ = trainer.act(params, task, trainer.normalize(state.obs, normalizers[task]))
+    z, a, _ = trainer.act(params, task, trainer.normalize(state.obs, normalizers[task]),
+                          at_step=at_step)
     state = env.step(state, a)
     ret = ret + alive * state.reward
     ended = alive * state.done
@@ -35,21 +38,24 @@ def episodes(trainer, params, normalizers, key, task: int, episodes: int, keep_s
   return traj, ret, success
 
 
-def returns(trainer, params, normalizers, key):
+def returns(trainer, params, normalizers, key, at_step=None):
   """{task: {"return", "success"}} of the deterministic policy, averaged over `eval_envs`
-  episodes per task."""
+  episodes per task (`at_step`: as for `episodes`)."""
   out = {}
   for n, name in enumerate(trainer.config.tasks):
     key, sub = jax.random.split(key)
-    _, ret, success = episodes(trainer, params, normalizers, sub, n, trainer.config.eval_envs)
+    _, ret, success = episodes(trainer, params, normalizers, sub, n, trainer.config.eval_envs,
+                               at_step=at_step)
     out[name] = {"return": ret.mean(), "success": success.mean()}
   return out
 
 
 def evaluate(trainer, state) -> dict[str, dict[str, float]]:
-  """The evaluation of a state; its key depends on the step only, never on training's rng."""
+  """The evaluation of a state; its key depends on the step only, never on training's rng. A
+  residual acts with the weight of the state's step: the policy as it trained."""
   key = jax.random.fold_in(jax.random.PRNGKey(trainer.config.seed + 1), int(state.step))
-  out = trainer.evaluate(state.params, state.normalizers, key)
+  at_step = state.step if trainer.model.residual else None
+  out = trainer.evaluate(state.params, state.normalizers, key, at_step=at_step)
   return jax.tree.map(float, jax.device_get(out))
 
 

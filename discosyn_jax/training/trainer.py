@@ -3,6 +3,7 @@
   for each task (a Python loop unrolled at trace time: tasks have different models)
     lax.scan over unroll_length control steps, num_envs envs in parallel:
       obs -> normalise -> head_n -> z -> decoder -> a -> env_n.step
+      (with a residual: a += rho(step) r, r from head n's residual; agent/residual.py)
   extended reward r + alpha2 log q(z|a); GAE per task (brax's compute_gae, with truncation)
   PPO epochs over minibatches, every task's samples in every minibatch; the discriminator is
   fitted in the same optimiser steps on its own parameters (see ppo.py)
@@ -29,7 +30,7 @@ from brax.training.agents.ppo.losses import compute_gae
 from flax import struct
 from jax.sharding import PartitionSpec as P
 
-from discosyn_jax.agent import networks, policy, ppo
+from discosyn_jax.agent import networks, policy, ppo, residual
 from discosyn_jax.agent.networks import DiscoSyn
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import wrappers
@@ -137,32 +138,43 @@ class Trainer:
       return obs
     return running_statistics.normalize(obs, norm, max_abs_value=10.0)
 
-  def act(self, params, task: int, obs, key=None):
+  def act(self, params, task: int, obs, key=None, at_step=None):
     """(z, a, log pi(z, a | s)) for normalised `obs`; the means (and no log-prob) when
-    `key` is None."""
+    `key` is None. `at_step`: the train step whose residual weight to act with (with a
+    residual; None: its cap, the weight of a finished run)."""
+    rho = self.rho(at_step)
     if key is None:
-      return (*policy.deterministic(self.model, params, task, obs), None)
-    return policy.sample(self.model, params, task, obs, self._noise(key, obs.shape[0]))
+      return (*policy.deterministic(self.model, params, task, obs, rho), None)
+    return policy.sample(self.model, params, task, obs, self._noise(key, obs.shape[0]), rho)
+
+  def rho(self, step=None):
+    """The residual's weight at train step `step` (its cap when None); None without one."""
+    if not self.model.residual:
+      return None
+    return jnp.float32(self.config.residual) if step is None else residual.rho(self.config, step)
 
   def _noise(self, key, batch: int):
-    return policy.noise(key, batch, self.model.n_synergies, self.action_size)
+    return policy.noise(key, batch, self.model.n_synergies, self.action_size, self.model.residual)
 
-  def _unroll(self, params, norm, env_state, key, task: int):
+  def _unroll(self, params, norm, env_state, key, task: int, rho=None):
     """`unroll_length` steps of every env: under shard_map, each device its own envs."""
     env = self._train[task]
     keys = jax.random.split(key, self.config.unroll_length)
     noise = jax.vmap(lambda k: self._noise(k, self.config.num_envs))(keys)  # (T, B, ...)
     envs, time_envs = P(devices_lib.AXIS), P(None, devices_lib.AXIS)
+    args, specs = (params, norm, env_state, noise), (P(), P(), envs, time_envs)
+    if rho is not None:
+      args, specs = args + (rho,), specs + (P(),)
     local = jax.shard_map(lambda *args: self._local_unroll(env, task, *args), mesh=self.mesh,
-                          in_specs=(P(), P(), envs, time_envs),
-                          out_specs=(envs, time_envs), check_vma=False)
-    return local(params, norm, env_state, noise)
+                          in_specs=specs, out_specs=(envs, time_envs), check_vma=False)
+    return local(*args)
 
-  def _local_unroll(self, env, task: int, params, norm, env_state, noise):
+  def _local_unroll(self, env, task: int, params, norm, env_state, noise, rho=None):
 
     def step(env_state, noise):
       obs = env_state.obs
-      z, a, log_prob = policy.sample(self.model, params, task, self.normalize(obs, norm), noise)
+      z, a, log_prob = policy.sample(self.model, params, task, self.normalize(obs, norm), noise,
+                                     rho)
       env_state = env.step(env_state, a)
       info = env_state.info
       out = dict(obs=obs, z=z, action=a, log_prob=log_prob, reward=env_state.reward,
@@ -178,10 +190,14 @@ class Trainer:
     cfg = self.config
     rng, update_key, *task_keys = jax.random.split(state.rng, 2 + len(self.envs))
     params = state.params
+    rho = self.rho(state.step)  # None without a residual
     env_states, norms, samples, metrics, own_values = [], [], [], {}, {}
     for n, name in enumerate(cfg.tasks):
       env_state, traj = self._unroll(params, state.normalizers[n], state.env_states[n],
-                                     task_keys[n], n)
+                                     task_keys[n], n, rho)
+      if rho is not None:
+        metrics.update({f"{name}/{k}": v for k, v in self._action_shares(
+            params, n, self.normalize(traj["obs"], state.normalizers[n]), traj["z"], rho).items()})
       norm = state.normalizers[n]
       if cfg.normalize_observations:
         norm = running_statistics.update(norm, traj["obs"].reshape(-1, traj["obs"].shape[-1]))
@@ -204,7 +220,10 @@ class Trainer:
       metrics.update({f"{name}/{k}": v for k, v in _episode_metrics(traj, log_q, cfg.alpha2).items()})
       own_values[name] = _finite_values(traj, env_state.obs)
 
-    params, opt_state, loss_metrics = self._update(params, state.opt_state, samples, update_key)
+    params, opt_state, loss_metrics = self._update(params, state.opt_state, samples, update_key,
+                                                   rho)
+    if rho is not None:
+      metrics["residual/rho"] = rho
     for n, name in enumerate(cfg.tasks):
       metrics.update({f"{name}/{k}": v for k, v in loss_metrics["tasks"][n].items()})
     metrics.update(loss_metrics["shared"])
@@ -220,14 +239,24 @@ class Trainer:
     metrics = jax.lax.with_sharding_constraint(metrics, devices_lib.replicated(self.mesh))
     return new, metrics
 
-  def _update(self, params, opt_state, samples: list[ppo.Samples], key):
-    """`update_epochs` passes of `num_minibatches` optimiser steps over every task's samples."""
+  def _action_shares(self, params, task: int, obs, z, rho) -> dict[str, jax.Array]:
+    """How much of a rollout's actions each part carries: the mean |.| over envs, steps and
+    actuators of the synergies' part (the decoder's mean, posture included) and of the
+    residual's (rho times its mean)."""
+    synergy, res = policy.action_parts(self.model, params, task, obs, z, rho)
+    return {"action_synergy": jnp.abs(synergy).mean(), "action_residual": jnp.abs(res).mean()}
+
+  def _update(self, params, opt_state, samples: list[ppo.Samples], key, rho=None):
+    """`update_epochs` passes of `num_minibatches` optimiser steps over every task's samples
+    (`rho`: the residual's weight they were drawn with, with a residual; None: its cap)."""
     cfg = self.config
+    if rho is None:
+      rho = self.rho()  # still None without a residual
     grad_fn = jax.grad(ppo.loss, has_aux=True)
 
     def minibatch_step(carry, batch):
       params, opt_state = carry
-      grads, (per_task, shared) = grad_fn(params, self.model, batch, cfg)
+      grads, (per_task, shared) = grad_fn(params, self.model, batch, cfg, rho)
       updates, opt_state = self.optimizer.update(grads, opt_state, params)
       shared = dict(shared, grad_norm=optax.tree.norm(grads), **_grad_norms_by_role(grads))
       return (optax.apply_updates(params, updates), opt_state), {"tasks": per_task, "shared": shared}

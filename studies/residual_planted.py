@@ -1,0 +1,104 @@
+"""Which residual schedule (agent/residual.py) on the planted test bed with targets partly
+outside the span: the `planted` preset's run (planted-disco3-linear, 2.05 M env steps of
+four tasks) on `planted_out<n>`, the planted tasks with `outside` > 0 (registered by this
+study for its own process), once per variant and seed, one run at a time; then a table per
+variant: final success, the mean over the evaluation curve and the final return (an
+episode pays at most 10; each a mean over the tasks), the action shares at the end, and the
+decoder's overlap with the planted span. A goal whose target lies mostly in the span can
+succeed without the residual: success alone undersells what the part outside costs.
+
+  python -m studies.residual_planted --out runs/residual-planted --seeds 0 1
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+
+VARIANTS = {  # name: the residual's fields
+    "none": dict(residual=0.0),
+    "const0.3": dict(residual=0.3),
+    "ramp0.3": dict(residual=0.3, residual_ramp_steps=200),
+    "ramp0.15": dict(residual=0.15, residual_ramp_steps=200),
+}
+PRESET = "planted-disco3-linear"
+
+
+def register_outside_tasks(outside: float) -> tuple[str, ...]:
+  """planted_out0-3: planted0-3 with `outside`, in this process's registry."""
+  from discosyn_jax.tasks import planted, registry
+
+  names = []
+  for n in range(4):
+    name = f"planted_out{n}"
+    registry.REGISTRY[name] = registry.Entry(
+        lambda config: config, lambda n=n, **kw: planted.default_config(index=n, outside=outside, **kw),
+        f"planted{n} with a target part outside the span ({outside})", env=planted.PlantedEnv)
+    names.append(name)
+  return tuple(names)
+
+
+def config_for(variant: str, seed: int, task_names, steps: int | None):
+  from discosyn_jax.experiments import presets
+
+  config = presets.preset(PRESET).replace(tasks=task_names, seed=seed, **VARIANTS[variant])
+  return (config if steps is None else config.replace(steps=steps)).validate()
+
+
+def summary(run_dir: pathlib.Path) -> dict:
+  """Final success, its mean over the evaluation curve, the final return, the action shares
+  and the overlap with the planted span at the end (each a mean over the tasks)."""
+  from discosyn_jax.run import layout, logs
+
+  config = json.loads((run_dir / layout.CONFIG_FILE).read_text())
+  evals = logs.read_jsonl(run_dir / layout.EVAL_FILE)
+  metrics = logs.read_jsonl(run_dir / layout.METRICS_FILE)
+  names = config["tasks"]
+  mean = lambda row, key: sum(row[f"{t}/{key}"] for t in names) / len(names)
+  success = [mean(row, "success") for row in evals]
+  last = metrics[-1]
+  share = lambda key: (sum(last[f"{t}/{key}"] for t in names) / len(names)
+                       if f"{names[0]}/{key}" in last else None)  # logged with a residual
+  overlap = next((row["decoder/overlap_planted"] for row in reversed(metrics)
+                  if "decoder/overlap_planted" in row), float("nan"))
+  return {"env_steps": evals[-1].get("env_steps"), "final": success[-1],
+          "curve": sum(success) / len(success), "return": mean(evals[-1], "return"),
+          "synergy": share("action_synergy"),
+          "residual": share("action_residual"), "overlap": overlap}
+
+
+def main(argv=None):
+  parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("runs/residual-planted"))
+  parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1])
+  parser.add_argument("--outside", type=float, default=0.5,
+                      help="the target's part outside the span (default: %(default)s)")
+  parser.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
+  parser.add_argument("--steps", type=int, help="train steps (default: the preset's)")
+  args = parser.parse_args(argv)
+
+  from discosyn_jax import tasks
+  from discosyn_jax.training import loop
+
+  names = register_outside_tasks(args.outside)
+  rows = []
+  for variant in args.variants:
+    for seed in args.seeds:
+      run_dir = args.out / f"{variant}-outside{args.outside}-seed{seed}"
+      if not (run_dir / "final").exists():  # one run at a time; a finished one is kept
+        loop.train(config_for(variant, seed, names, args.steps), run_dir,
+                   make_trainer=tasks.trainer, force=run_dir.exists(), progress=False,
+                   log=lambda *a: None)
+      rows.append((variant, seed, summary(run_dir)))
+  print("| variant | seed | env steps | final success | success, mean over the curve | "
+        "final return | mean abs D(z) | mean abs rho r | overlap with the span |")
+  print("|---|---|---|---|---|---|---|---|---|")
+  share = lambda value: "–" if value is None else f"{value:.3f}"
+  for variant, seed, s in rows:
+    print(f"| {variant} | {seed} | {s['env_steps']:,} | {s['final']:.2f} | {s['curve']:.2f} | "
+          f"{s['return']:.2f} | {share(s['synergy'])} | {share(s['residual'])} | {s['overlap']:.2f} |")
+
+
+if __name__ == "__main__":
+  main()
