@@ -98,7 +98,11 @@ def test_a_wheel_carries_the_xml_and_works_outside_the_checkout(tmp_path):
   with zipfile.ZipFile(wheel) as zf:
     names = set(zf.namelist())
     assert {"discosyn_jax/xml/hands/shadow20.xml", "discosyn_jax/xml/hands/leap16.xml",
-            "discosyn_jax/xml/objects/valve0.xml", "discosyn_jax/tasks/valve.py"} <= names
+            "discosyn_jax/xml/objects/valve0.xml", "discosyn_jax/tasks/valve.py",
+            "discosyn_jax/experiments/presets.py"} <= names
+    # two top-level names, both the project's own: none a user's tasks.py could shadow
+    assert {n.split("/")[0] for n in names if not n.split("/")[0].endswith(".dist-info")} == {
+        "discosyn", "discosyn_jax"}
     zf.extractall(tmp_path / "site")
   code = ("from discosyn_jax import tasks; import discosyn_jax.env.assets as a; env = tasks.make('valve3', backend='native');"
           "print('RESULT', tasks.__file__, a.xml_dir(), env.observation_size)")
