@@ -291,6 +291,9 @@ def _run(args) -> int:
     from discosyn_jax import checks
 
     checks.jax_environment(discosyn_jax.XLA_FLAG)
+    from discosyn_jax.env.physics import mjx_backend
+
+    mjx_backend.check_environment()  # a misspelt DISCOSYN_MJX_IMPL, whatever the backend
     if getattr(args, "batch", 1) < 1:
       raise commands.UsageError(f"--batch must be at least 1, not {args.batch}")
     if getattr(args, "seed", None) is not None:

@@ -7,7 +7,6 @@ import struct
 import jax
 import jax.numpy as jnp
 import numpy as np
-from mujoco import mjx
 from tensorboardX.proto import event_pb2
 
 from discosyn_jax import tasks
@@ -44,14 +43,13 @@ def env(name: str, backend: str = "native", hand: str = "shadow20"):
 
 def on_mjx(native_env, mjx_env, state):
   """A state of `native_env` (one env or a batch) with its physics put on MJX: the host
-  MjData after MuJoCo C's forward, as `mjx.put_data` makes it. A test that starts MJX from
-  here compiles MJX's step only, not its reset too (each about half a minute on 2 cores);
-  MJX's reset itself is run by tests/test_backends.py."""
+  MjData after MuJoCo C's forward, as the MJX backend takes it (`from_mjdata`). A test that
+  starts MJX from here compiles MJX's step only, not its reset too (each about half a minute
+  on 2 cores); MJX's reset itself is run by tests/test_backends.py."""
   lead = state.reward.shape
   host = jax.device_get(state.pipeline_state)
-  datas = [mjx.put_data(mjx_env.mj_model,
-                        native_env.physics.to_mjdata(jax.tree.map(lambda x: x[i], host)),
-                        impl=mjx_env.physics.impl)
+  datas = [mjx_env.physics.from_mjdata(
+               native_env.physics.to_mjdata(jax.tree.map(lambda x: x[i], host)))
            for i in np.ndindex(lead)]
   pstate = jax.tree.map(lambda *x: jnp.stack(x).reshape(lead + x[0].shape), *datas)
   return state.replace(pipeline_state=pstate)

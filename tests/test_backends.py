@@ -76,15 +76,15 @@ def test_the_mjx_implementation_is_chosen_by_name_and_checked(monkeypatch):
   from discosyn_jax.env.physics import mjx_backend
 
   monkeypatch.setenv("DISCOSYN_MJX_IMPL", "cuda")
-  with pytest.raises(ValueError, match="unknown MJX implementation 'cuda'"):
+  with pytest.raises(ValueError, match="DISCOSYN_MJX_IMPL: unknown MJX implementation 'cuda'"):
     mjx_backend.default_impl()
   monkeypatch.setenv("DISCOSYN_MJX_IMPL", "jax")
   assert mjx_backend.default_impl() == "jax"
   monkeypatch.delenv("DISCOSYN_MJX_IMPL")  # unset: JAX's, whatever is installed (Warp is asked for)
   assert mjx_backend.default_impl() == "jax"
-  if importlib.util.find_spec("mujoco_warp") is None:
+  if importlib.util.find_spec("warp") is None:  # MJX's Warp implementation needs warp-lang
     monkeypatch.setenv("DISCOSYN_MJX_IMPL", "warp")
-    with pytest.raises(ValueError, match="needs mujoco_warp"):
+    with pytest.raises(ValueError, match="needs warp-lang"):
       mjx_backend.default_impl()
 
 

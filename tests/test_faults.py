@@ -619,6 +619,8 @@ def test_a_stop_inside_the_physics_callback_even_pressed_twice_ends_in_one_line(
                                "backend 'bogus'"),
     ("XLA_FLAGS", "--garbage_flag", "environment variable XLA_FLAGS holds a flag XLA does not "
                                     "know: --garbage_flag"),
+    ("DISCOSYN_MJX_IMPL", "cuda", "environment variable DISCOSYN_MJX_IMPL: unknown MJX "
+                                  "implementation 'cuda'; known: jax, warp"),
 ])
 def test_a_bad_jax_environment_is_one_line_before_the_run_folder(tmp_path, variable, value,
                                                                  fragment):

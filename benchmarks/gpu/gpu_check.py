@@ -3,13 +3,17 @@
   bash benchmarks/gpu/wheels.sh          # once: the wheels a bare GPU image lacks
   # on the GPU machine (docs/SCALING.md has the exact call):
   python3 benchmarks/gpu/gpu_check.py --methods DiscoSyn3-L-reward --budget-s 500 --out $OUT
+  # MuJoCo Warp beside MJX's JAX implementation, the same row (the warp-lang wheel in .whl/):
+  python3 benchmarks/gpu/gpu_check.py --methods DiscoSyn3-L-reward --impls warp jax --out $OUT
 
 Each result one JSON line in OUT/gpu_check.jsonl as soon as it is measured (a run cut
 short keeps what it measured); the methods (--methods: rows of the paper's tables,
 configured as `discosyn experiment` configures them at --scale and --seed) one after the
-other, each trained as soon as it has started. On a cold machine the start of the `gpu`
-scale takes minutes (docs/BENCHMARKS.md, "GPU"): a call of 15 minutes fits one method.
-  versions   python, jax, mujoco, mujoco-mjx, brax, the devices
+other, each trained as soon as it has started; with --impls, each under each of MJX's
+implementations (`jax`, `warp`: DISCOSYN_MJX_IMPL), logged as METHOD/IMPL. On a cold machine
+the start of the `gpu` scale takes minutes (docs/BENCHMARKS.md, "GPU"): a call of 15 minutes
+fits one method.
+  versions   python, jax, mujoco, mujoco-mjx, warp-lang, brax, the devices
   phase      per method, as each part of its start ends: Trainer build, the physics
              prior's start where the method has one, `init()`, the compiles of the train
              step and of the evaluation (none with --eval-every 0)
@@ -49,7 +53,7 @@ import jax.numpy as jnp  # noqa: E402
 
 from discosyn_jax import tasks  # noqa: E402
 from discosyn_jax.training import loop  # noqa: E402
-from discosyn_jax.experiments import paper  # noqa: E402
+from discosyn_jax.experiments import bench, paper  # noqa: E402
 from studies import physics_study  # noqa: E402
 
 
@@ -78,8 +82,12 @@ def versions() -> dict:
                          timeout=30).stdout.strip()
   except (OSError, subprocess.SubprocessError):
     gpu = None
+  try:
+    warp = metadata.version("warp-lang")
+  except metadata.PackageNotFoundError:
+    warp = None
   return dict(python=platform.python_version(), jax=jax.__version__, mujoco=mujoco.__version__,
-              mjx=metadata.version("mujoco-mjx"), brax=brax.__version__,
+              mjx=metadata.version("mujoco-mjx"), warp=warp, brax=brax.__version__,
               devices=[str(d) for d in jax.devices()], backend=jax.default_backend(),
               gpu=gpu, cpus=os.cpu_count())
 
@@ -171,8 +179,9 @@ def start_method(log: Log, method: str, config, evaluations: bool = True):
     key = jax.random.PRNGKey(0)
     evaluate = phase("eval_compile", lambda: trainer.evaluate.lower(
         state.params, state.normalizers, key).compile())
-  log("start", method=method, backend=trainer.envs[0].backend, num_envs=config.num_envs,
-      env_steps_per_train_step=config.env_steps_per_train_step, decoder_init=config.decoder_init,
+  log("start", method=method, backend=bench.backend_label(trainer.envs[0]),
+      num_envs=config.num_envs, env_steps_per_train_step=config.env_steps_per_train_step,
+      decoder_init=config.decoder_init,
       **{f"{name}_s": seconds for name, seconds in took.items()}, start_s=sum(took.values()))
   return config, state, train_step, evaluate
 
@@ -226,6 +235,9 @@ def main(argv=None):
                       help="sizes of the training (discosyn_jax/experiments/paper.py SCALES)")
   parser.add_argument("--backend", default="mjx", choices=["mjx", "native"],
                       help="physics of the training (native: a CPU dry run)")
+  parser.add_argument("--impls", nargs="+", choices=["jax", "warp"],
+                      help="MJX's implementations, each method under each (default: "
+                           "DISCOSYN_MJX_IMPL's, else jax)")
   parser.add_argument("--physics", action="store_true",
                       help="also time the MJX physics alone (after the start, before training)")
   parser.add_argument("--batches", type=int, nargs="+", default=[2048, 8192, 16384],
@@ -240,6 +252,9 @@ def main(argv=None):
                            "training success alone)")
   parser.add_argument("--budget-s", type=float, default=480.0,
                       help="seconds from the start after which the last method stops training")
+  parser.add_argument("--train-s", type=float,
+                      help="seconds of training per method (default: an equal share of what is "
+                           "left of --budget-s): implementations compared over the same time")
   parser.add_argument("--final-eval-s", type=float, default=15.0,
                       help="seconds of each method's share kept back for its final evaluation")
   parser.add_argument("--out", default=os.environ.get("OUT", "runs/gpu_check"),
@@ -253,15 +268,19 @@ def main(argv=None):
   log = Log(pathlib.Path(args.out) / "gpu_check.jsonl")
   log("versions", **versions())
 
-  for i, (method, config) in enumerate(todo.items()):
-    started = start_method(log, method, config, evaluations=args.eval_every > 0)
-    if args.physics and i == 0:
-      try:  # a failure here must not cost the training below its share of the call
-        measure_physics(log, config.tasks, args.batches, args.settings, args.physics_steps,
-                        args.threads)
-      except Exception as e:  # noqa: BLE001 - reported, then the check goes on
-        log("physics_failed", error=f"{type(e).__name__}: {e}"[:2000])
-    share = (args.budget_s - (time.perf_counter() - start)) / (len(todo) - i)
+  runs = [(f"{method}/{impl}" if impl else method, impl, config)
+          for impl in (args.impls or [None]) for method, config in todo.items()]
+  for i, (method, impl, config) in enumerate(runs):
+    with bench.mjx_impl(impl):  # the envs built inside
+      started = start_method(log, method, config, evaluations=args.eval_every > 0)
+      if args.physics and i == 0:
+        try:  # a failure here must not cost the training below its share of the call
+          measure_physics(log, config.tasks, args.batches, args.settings, args.physics_steps,
+                          args.threads)
+        except Exception as e:  # noqa: BLE001 - reported, then the check goes on
+          log("physics_failed", error=f"{type(e).__name__}: {e}"[:2000])
+    left = args.budget_s - (time.perf_counter() - start)
+    share = min(args.train_s, left) if args.train_s else left / (len(runs) - i)
     train_method(log, method, *started, share, args.eval_every, args.final_eval_s)
   log("done", total_s=time.perf_counter() - start)
 

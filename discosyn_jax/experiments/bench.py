@@ -3,9 +3,11 @@
   discosyn bench                                  # set1-disco3-linear, native, its batch (128)
   discosyn bench --batches 64 128 256 --repeats 5
   discosyn bench --backends native mjx --batches 16 --steps 1 --repeats 1   # MJX on a CPU: small
+  discosyn bench --backends mjx --impls jax warp --no-train --tasks valve3 --batches 16
   discosyn bench --no-train --tasks set2 unseen sparse --batches 64         # physics only
 
-For every backend and batch size (envs per task) it prints, in env (control) steps per second:
+For every backend (MJX: per implementation, `mjx/jax`, `mjx/warp`) and batch size (envs per
+task) it prints, in env (control) steps per second:
   rollout    raw `mujoco.rollout` of the same models, states and controls (batch envs x
              unroll_length steps per task from the tasks' reset states, one task after the
              other as in the train step): the machine's limit
@@ -25,6 +27,7 @@ For every backend and batch size (envs per task) it prints, in env (control) ste
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import platform
 import resource
@@ -168,20 +171,40 @@ def _median_range(values) -> str:
   return f"{statistics.median(values):.2f} ({min(values):.2f}-{max(values):.2f})"
 
 
-def bench_row(config, args) -> dict:
-  """Every figure of one backend and batch: see the module docstring."""
+@contextlib.contextmanager
+def mjx_impl(impl: str | None):
+  """MJX's implementation for the envs built inside (DISCOSYN_MJX_IMPL; None: as set)."""
+  before = os.environ.get("DISCOSYN_MJX_IMPL")
+  if impl:
+    os.environ["DISCOSYN_MJX_IMPL"] = impl
+  try:
+    yield
+  finally:
+    if before is None:
+      os.environ.pop("DISCOSYN_MJX_IMPL", None)
+    else:
+      os.environ["DISCOSYN_MJX_IMPL"] = before
+
+
+def backend_label(env) -> str:
+  return f"mjx/{env.physics.impl}" if env.backend == "mjx" else env.backend
+
+
+def bench_row(config, args, impl: str | None = None) -> dict:
+  """Every figure of one backend (MJX's `impl`) and batch: see the module docstring."""
   import jax
 
   from discosyn_jax import tasks
-  trainer = tasks.trainer(config, devices=args.devices) if args.train else None
-  envs = trainer.envs if trainer else tasks.make_envs(config)
+  with mjx_impl(impl):
+    trainer = tasks.trainer(config, devices=args.devices) if args.train else None
+    envs = trainer.envs if trainer else tasks.make_envs(config)
   clock = CallbackClock(envs)
   T, B = config.unroll_length, config.num_envs
   total = len(envs) * B * T  # env steps of one pass over every task
   states, actions = bench_inputs(envs, B, T)
   raw = [RawRollout(env, state, actions, native_threads()) for env, state in zip(envs, states)]
   physics, physics_compile = physics_runner(envs, states, actions)
-  row = dict(backend=envs[0].backend, batch=B, physics_compile=physics_compile)
+  row = dict(backend=backend_label(envs[0]), batch=B, physics_compile=physics_compile)
   if trainer:
     state = trainer.init()
     start = time.perf_counter()
@@ -232,6 +255,9 @@ def build_parser(parser: argparse.ArgumentParser | None = None) -> argparse.Argu
   parser.add_argument("--tasks", nargs="+", help="tasks or task sets (default: the preset's)")
   parser.add_argument("--backends", nargs="+", default=["native"], choices=["native", "mjx"],
                       help="physics backends, a row each (default: native)")
+  parser.add_argument("--impls", nargs="+", choices=["jax", "warp"],
+                      help="MJX's implementations, a row each for backend mjx (default: "
+                      "DISCOSYN_MJX_IMPL's, else jax)")
   parser.add_argument("--batches", type=int, nargs="+",
                       help="envs per task, a row each (default: the preset's num_envs)")
   parser.add_argument("--epochs", type=int, help="PPO epochs (default: the preset's)")
@@ -267,10 +293,12 @@ def run(args) -> None:
   for name in ("steps", "repeats"):
     if getattr(args, name) < 1:
       raise ValueError(f"--{name} must be at least 1, not {getattr(args, name)}")
-  configs = [base.replace(backend=backend, num_envs=batch, physics=physics).validate()
-             for backend in args.backends for batch in (args.batches or [base.num_envs])
-             for physics in (args.physics or [base.physics])]
-  c = configs[0]
+  rows = [(impl, base.replace(backend=backend, num_envs=batch, physics=physics).validate())
+          for backend in args.backends
+          for impl in ((args.impls or [None]) if backend == "mjx" else [None])
+          for batch in (args.batches or [base.num_envs])
+          for physics in (args.physics or [base.physics])]
+  c = rows[0][1]
   print(f"# {platform.node()}: {os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}; "
         f"jax {jax.__version__} on {jax.device_count()} x {jax.devices()[0].device_kind}, "
         f"mujoco {mujoco.__version__}, {native_threads()} native threads")
@@ -281,8 +309,8 @@ def run(args) -> None:
         "train/rollout | callback share | update s (share) | compile s (train, physics) | "
         "peak mem GiB |")
   print("|---|---|---|---|---|---|---|---|---|---|---|---|")
-  for config in configs:
-    r = bench_row(config, args)
+  for impl, config in rows:
+    r = bench_row(config, args, impl)
     train = (f"{r['train']:,.0f} | {r['train_ratio']} | {r['callback']:.0%} | "
              f"{r['update']:.3f} ({r['update_share']:.0%}) | "
              f"{r['compile']:.1f}, {r['physics_compile']:.1f}" if args.train

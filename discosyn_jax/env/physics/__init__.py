@@ -39,6 +39,6 @@ def make_backend(backend: str, model: mujoco.MjModel, n_substeps: int, **kwargs)
     from discosyn_jax.env.physics.native import NativeBackend
 
     return NativeBackend(model, n_substeps, **kwargs)
-  from discosyn_jax.env.physics.mjx_backend import MjxBackend
+  from discosyn_jax.env.physics import mjx_backend
 
-  return MjxBackend(model, n_substeps, **kwargs)
+  return mjx_backend.make(model, n_substeps, **kwargs)
