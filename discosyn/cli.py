@@ -126,7 +126,9 @@ def build_parser() -> argparse.ArgumentParser:
                  "the sparse valve and transfer from each seed's default decoder, set #2 last); "
                  "table1 | table2: one table's rows, the same steps as all's (a part of it); "
                  "discosyn-set1 | discosyn-set2 (every start and control tried) | "
-                 "baselines-set1 | baselines-set2 | transfer | sparse; the planted-synergy "
+                 "baselines-set1 | baselines-set2 | transfer | sparse (from the default "
+                 "row's decoder, then from the residual row's, acting with its residual); "
+                 "the planted-synergy "
                  "test bed: discosyn-planted | discosyn-planted_slack")
   p.add_argument("--scale", default="cpu", help="ci (seconds per run) | cpu (minutes per run on "
                  "2 cores) | gpu (one accelerator); default: %(default)s")

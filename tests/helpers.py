@@ -53,3 +53,20 @@ def on_mjx(native_env, mjx_env, state):
            for i in np.ndindex(lead)]
   pstate = jax.tree.map(lambda *x: jnp.stack(x).reshape(lead + x[0].shape), *datas)
   return state.replace(pipeline_state=pstate)
+
+
+# one MJX train step, as small as it goes: 2 envs of valve0, 2 steps, one minibatch
+ONE_MJX_STEP = dict(squash_z=False, decoder_init="random", tasks=("valve0",), n_synergies=3,
+                    decoder="linear", num_envs=2, unroll_length=2, num_minibatches=1,
+                    update_epochs=1, steps=1, eval_every=0, eval_envs=2, checkpoint_every=0,
+                    backend="mjx")
+
+
+def assert_one_step_learns(trainer, state):
+  """One train step from `state`: finite, counted, and every parameter group moved."""
+  before = jax.tree.map(np.asarray, state.params)
+  state, metrics = trainer.train_step(state)
+  assert int(state.step) == 1 and bool(metrics["finite"])
+  moved = jax.tree.leaves(jax.tree.map(lambda a, b: np.abs(np.asarray(a) - b).max(),
+                                       state.params, before))
+  assert max(moved) > 0

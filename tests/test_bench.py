@@ -2,6 +2,7 @@
 trajectories as the env it is the limit of; bad input is exit 2."""
 
 import numpy as np
+import pytest
 
 from discosyn import cli
 
@@ -44,3 +45,31 @@ def test_the_raw_limit_replays_the_envs_own_states_and_controls():
     assert moved > 1e-2  # the hand moved: the comparison below is not of two rest poses
     np.testing.assert_allclose(trajectory[:, -1, 1:1 + nq], np.asarray(final.pipeline_state.qpos),
                                atol=1e-5)
+
+
+def test_wheels_travel_in_parts_and_join_only_whole(tmp_path):
+  """benchmarks/gpu/wheel_parts.py: parts no larger than asked, a large wheel cut into
+  pieces, joined back byte for byte; a part not yet arrived is named, nothing installed."""
+  from benchmarks.gpu import wheel_parts
+
+  wheels, parts, rng = tmp_path / "whl", tmp_path / "parts", np.random.default_rng(0)
+  wheels.mkdir()
+  sizes = {"big-1.0-py3-none-any.whl": 2_500, "mid-1.0-py3-none-any.whl": 700,
+           "small-1.0-py3-none-any.whl": 200}
+  for name, size in sizes.items():
+    (wheels / name).write_bytes(rng.bytes(size))
+  folders = wheel_parts.split(wheels, parts, 1_000)
+  assert len(folders) == 4  # the big one in 3 pieces; mid and small share the last
+  assert all(sum(f.stat().st_size for f in folder.iterdir() if f.name != wheel_parts.MANIFEST)
+             <= 1_000 for folder in folders)
+  moved = tmp_path / "later"
+  folders[1].rename(moved)  # one part still to come
+  with pytest.raises(ValueError, match="1 of the wheels' pieces have not arrived: "
+                                       "big-1.0-py3-none-any.whl.piece01"):
+    wheel_parts.join(parts, tmp_path / "joined")
+  assert not (tmp_path / "joined").exists()
+  moved.rename(folders[1])
+  joined = wheel_parts.join(parts, tmp_path / "joined")
+  assert sorted(p.name for p in joined) == sorted(sizes)
+  for p in joined:
+    assert p.read_bytes() == (wheels / p.name).read_bytes()

@@ -66,6 +66,10 @@ def test_an_archived_log_reads_as_the_log_itself(toy_run, tmp_path):
       if not exact:
         # at most 5 significant digits: printing it with 5 gives it back (13482.0 included)
         assert float(f"{kept_row[key]:.5g}") == kept_row[key]
+  # read at the archive's precision, the log and its archive are the same rows (the report
+  # of a run and of its record agree to the digit)
+  assert logs.read_log(plain, as_archived=True) == archived
+  assert logs.read_log(kept.with_name("none.jsonl"), as_archived=True) == []
 
 
 def test_tensorboard_holds_the_jsonl_numbers_over_env_steps(toy_run):

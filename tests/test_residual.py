@@ -222,3 +222,61 @@ def test_a_bad_residual_flag_is_one_line_exit_2_and_nothing_made(argv, line, tmp
   (err,) = capsys.readouterr().err.splitlines()
   assert err.startswith(line), err
   assert not out.exists()
+
+
+# -- transfer and the sparse valve from the residual row's decoder ---------------------------
+
+
+def test_transfer_and_sparse_freeze_the_residual_rows_decoder_and_act_with_its_residual(tmp_path):
+  from discosyn_jax.experiments import paper, presets
+
+  planner = paper.Planner(tmp_path, "cpu", 0)
+  steps = planner.plan("transfer") + planner.plan("sparse")
+  by_method = {(s.meta["experiment"], s.meta["set"], s.meta["method"]): s for s in steps}
+  half = paper.SCALES["cpu"].train_for("unseen-set1")["steps"] // 2
+  for experiment, task_set, source in (("transfer", "unseen-set1", "discosyn3-l-reward-res0.3r150-set1-seed0"),
+                                       ("transfer", "unseen-set2", "discosyn6-l-reward-res0.3r600-set2-seed0"),
+                                       ("sparse", "sparse", "discosyn3-l-reward-res0.3r150-set1-seed0")):
+    learned = source.split("-set")[0].replace("discosyn", "DiscoSyn").replace("-l-", "-L-")
+    frozen = by_method[experiment, task_set, f"{learned} frozen-res0.3r{half}"]
+    # the decoder of the residual row's own run (the same folder as discosyn-<set>'s)
+    assert frozen.needs == (source,)
+    assert frozen.config.decoder_from == str(tmp_path.resolve() / source / "decoder.npz")
+    assert frozen.config.freeze_decoder and frozen.name.split("-")[:3] == [experiment, "synergies", "residual"]
+    # the source's cap, ramped in over the first half of this run's own budget
+    assert (frozen.config.residual, frozen.config.residual_ramp_steps) == (presets.RESIDUAL_CAP, half)
+    b = frozen.config.n_synergies
+    for control in (f"Random{b}-L-res0.3r{half}", f"Random{b}-L-zfree-res0.3r{half}"):
+      assert by_method[experiment, task_set, control].config.residual == presets.RESIDUAL_CAP
+    # beside the paper's rows, which stay as they were; one full-action run for both
+    paper_row = by_method[experiment, task_set, f"DiscoSyn{b}-L-reward frozen"]
+    assert paper_row.config.residual == 0.0
+    assert by_method[experiment, task_set, "PPO"].config.residual == 0.0
+  names = [s.name for s in planner.plan("transfer")]
+  assert len(names) == len(set(names))
+  assert sum(n.startswith("transfer-ppo-set1") for n in names) == 1
+  # `all` keeps the paper's rows: no residual among its transfer and sparse steps
+  frozen_in_all = [s for s in planner.plan("all") if s.meta["experiment"] in ("transfer", "sparse")]
+  assert frozen_in_all and not any(s.config.residual for s in frozen_in_all)
+
+
+def test_the_report_shows_each_parts_share_of_the_action():
+  """From committed records of set #1 with a residual: a row per method and task, the
+  residual's share at the end as the logs hold it."""
+  import pathlib
+
+  from discosyn_jax.experiments import report, report_runs
+
+  records = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results" / "residual-set1"
+  runs, _ = report_runs.find([records / f"{m}-set1-seed{s}" for m in
+                              ("discosyn3-l-reward-res0.3r150", "random3-l-zfree-res0.3r150")
+                              for s in (0, 1)])
+  rows = [line.split(" | ") for line in report.residual_table(runs).splitlines()[2:]]
+  assert [(r[0].strip("| "), r[2]) for r in rows] == [
+      (m, t) for m in ("DiscoSyn3-L-reward-res0.3r150", "Random3-L-zfree-res0.3r150")
+      for t in ("valve0", "valve1", "valve2", "valve3")]
+  ends = [[row for row in report_runs.metrics(r) if "residual/rho" in row][-10:]
+          for r in runs if r.method.startswith("DiscoSyn")]
+  share = [np.mean([row["valve2/action_residual"] for row in rows_]) for rows_ in ends]
+  assert rows[2][5].startswith(f"{np.mean(share):.2f} ({min(share):.2f}–{max(share):.2f}) [2]")
+  assert report.residual_table([r for r in runs if r.config.residual == 0]) == ""

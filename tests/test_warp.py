@@ -138,19 +138,9 @@ def test_warp_trainer_inits_and_trains_one_step(monkeypatch):
   """tests/test_backends.py's MJX train step, on Warp, with the reset pool (the `gpu`
   scale's): the training wrappers select rows of the physics state."""
   monkeypatch.setenv("DISCOSYN_MJX_IMPL", "warp")
-  config = TrainConfig(squash_z=False, decoder_init="random", tasks=("valve0",), n_synergies=3,
-                       decoder="linear", num_envs=2, unroll_length=2, num_minibatches=1,
-                       update_epochs=1, steps=1, eval_every=0, eval_envs=2, checkpoint_every=0,
-                       backend="mjx", reset_pool=True)
-  trainer = tasks.trainer(config)
+  trainer = tasks.trainer(TrainConfig(**helpers.ONE_MJX_STEP, reset_pool=True))
   assert trainer.envs[0].physics.impl == "warp"
-  state = trainer.init()
-  before = jax.tree.map(np.asarray, state.params)
-  state, metrics = trainer.train_step(state)
-  assert int(state.step) == 1 and bool(metrics["finite"])
-  moved = jax.tree.leaves(jax.tree.map(lambda a, b: np.abs(np.asarray(a) - b).max(),
-                                       state.params, before))
-  assert max(moved) > 0
+  helpers.assert_one_step_learns(trainer, trainer.init())
 
 
 def test_the_graph_mode_is_checked(monkeypatch):

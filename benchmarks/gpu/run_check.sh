@@ -6,6 +6,8 @@
 # on the same machine (a cache in a temporary folder did not spare a second run its start,
 # 2026-12-04).
 set -o pipefail
+# wheels that came in parts over earlier calls (wheel_parts.py): joined and checked first
+if [ -d .whl-parts ]; then python3 benchmarks/gpu/wheel_parts.py join || exit 2; fi
 python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade \
   --target /tmp/site .whl/*.whl || exit 1
 export PYTHONPATH="/tmp/site:$PWD" PYTHONUNBUFFERED=1 DISCOSYN_JAX_CACHE="$PWD/runs/jax-cache"

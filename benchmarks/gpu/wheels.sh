@@ -7,7 +7,9 @@
 # `gpu_check.py --impls warp jax` (149 MB of the wheels).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-grep -qx '/.whl/' .git/info/exclude 2>/dev/null || echo '/.whl/' >> .git/info/exclude
+for ignored in /.whl/ /.whl-parts/; do
+  grep -qx "$ignored" .git/info/exclude 2>/dev/null || echo "$ignored" >> .git/info/exclude
+done
 WHEELS=(mujoco==4.0.0 mujoco-core==4.0.0 mujoco-mjx==3.17.0 brax==0.14.2 jaxopt==0.8.5
         ml_collections==1.1.0 tensorboardX==2.6.5 trimesh==5.2.0 warp-lang==1.18.0)
 PYTHON="${PYTHON:-python3}"
@@ -16,3 +18,5 @@ PYTHON="${PYTHON:-python3}"
   --platform manylinux_2_17_x86_64 --platform manylinux2014_x86_64 --platform manylinux1_x86_64 \
   --platform any -d .whl "${WHEELS[@]}"
 du -ch .whl/*.whl | tail -1
+# what one call carries beside the tracked tree: .whl-parts/1, 2, ... (wheel_parts.py)
+"$PYTHON" benchmarks/gpu/wheel_parts.py split --mb "${PART_MB:-30}"

@@ -149,15 +149,25 @@ def _files(task: Task) -> set[str]:
   return files
 
 
+def traceback_frames(tb):
+  """A traceback's entries, outermost first."""
+  while tb is not None:
+    yield tb
+    tb = tb.tb_next
+
+
+def label(name: str) -> str:
+  """A task's name as a file name: a task of one's own ("file.py:Slider") by its class."""
+  return name.rpartition(":")[2]
+
+
 def _blame(task: Task, hand: hands.Hand | None, err: Exception) -> str | None:
   """The line of an exception whose traceback passes through the task's files: the
   function of the task it left (the outermost such frame) and where it was raised there
   (the innermost); None where no frame is the task's."""
-  files, frames, tb = _files(task), [], err.__traceback__
-  while tb is not None:
-    if os.path.realpath(tb.tb_frame.f_code.co_filename) in files:
-      frames.append(tb)
-    tb = tb.tb_next
+  files = _files(task)
+  frames = [tb for tb in traceback_frames(err.__traceback__)
+            if os.path.realpath(tb.tb_frame.f_code.co_filename) in files]
   if not frames:
     return None
   function, raised = frames[0].tb_frame.f_code.co_name, frames[-1]

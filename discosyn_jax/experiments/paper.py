@@ -22,6 +22,9 @@
                          decoder of the same size (z bounded, and z free) and full-action
                          PPO from scratch on the same tasks and budget
   sparse                 the sparse goal valve: the same rows, from set #1's decoder
+                         (transfer and sparse then the same again from the residual row's
+                         decoder, DiscoSyn<b>-L-reward-res..., each frozen run and its
+                         controls acting with that residual; not part of `all`)
   table1 / table2        a table's rows with today's defaults (PAPER_ROWS, not every start
                          and control discosyn-<set> tries): DiscoSyn, its controls and the
                          sequential baselines, the same steps and folders as in `all`
@@ -334,29 +337,41 @@ class Planner:
                          needs=(fit.name,)))
     return steps
 
-  def frozen_synergies(self, task_set: str, experiment: str) -> list:
+  def frozen_synergies(self, task_set: str, experiment: str, variant: str = "") -> list:
     """The source DiscoSyn run, then a frozen-decoder run, its random controls and a
-    full-action run on `task_set`."""
+    full-action run on `task_set`. `variant`: the source row's preset suffix; with
+    RESIDUAL_SUFFIX the source learned beside a residual, and the frozen run and its
+    controls act with the same cap, ramped in over the first half of their own budget (as
+    the source's was over its)."""
     source_set, b, kind = TRANSFER_FROM[task_set]
-    base = presets.preset(f"{source_set}-disco{b}-{kind}")
+    base = presets.preset(f"{source_set}-disco{b}-{kind}{variant}")
     if self.decoder_from:
       meta, _ = fitting.read(self.decoder_from)
-      source, path = None, self.decoder_from
+      source, path, method = None, self.decoder_from, fitting.method_name(meta)
     else:
-      source = self.discosyn(source_set, b, kind)
-      meta = fitting.meta_of(source.config)
+      source = self.discosyn(source_set, b, kind, variant)
+      meta, method = fitting.meta_of(source.config), source.meta["method"]
       path = self.out / source.name / layout.DECODER_FILE  # the record of its run
-    method = fitting.method_name(meta)  # with its start: "DiscoSyn3-L-reward frozen"
-    # folders: transfer-synergies-set1-seed0 (unseen tasks of set #1), sparse-synergies-seed0
+    changes = fitting.frozen_fields(meta, path)
+    if base.residual and not changes["decoder_noise"]:
+      return []  # a fitted space (--decoder-from) acts with its mean: no noise for a residual
+    if base.residual:
+      changes["residual_ramp_steps"] = max(1, self.sizes.train_for(task_set)["steps"] // 2)
+    config = self._config(base, task_set, **changes)
+    # named by its source row and its own residual: "DiscoSyn3-L-reward frozen",
+    # "DiscoSyn3-L-reward-res0.3r150 frozen-res0.3r150"
+    method = f"{method} frozen{fitting.residual_suffix(config)}"
+    # folders: transfer-synergies-set1-seed0 (unseen tasks of set #1), sparse-synergies-seed0,
+    # transfer-synergies-residual-set1-seed0
     label = task_set.removeprefix("unseen-")
-    folder = lambda what: (f"{experiment}-{what}-{self.tag}" if label == experiment
-                           else self._folder(f"{experiment}-{what}", label))
-    frozen = Train(folder("synergies"),
-                   self._config(base, task_set, **fitting.frozen_fields(meta, path)),
-                   _meta(experiment, f"{method} frozen", task_set, self.seed, self.scale),
+    folder = lambda what, variant=variant: (
+        f"{experiment}-{what}{variant}-{self.tag}" if label == experiment
+        else self._folder(f"{experiment}-{what}{variant}", label))
+    frozen = Train(folder("synergies"), config,
+                   _meta(experiment, method, task_set, self.seed, self.scale),
                    needs=(source.name,) if source else ())
-    scratch = self.ppo(task_set, experiment)
-    scratch = dataclasses.replace(scratch, name=folder("ppo"))
+    # one full-action run for every variant
+    scratch = dataclasses.replace(self.ppo(task_set, experiment), name=folder("ppo", ""))
     # the learned space against a random one of the same size, z bounded as it is, and z
     # free: the stronger of the two is the control
     random = dataclasses.replace(self.random_decoder(frozen, task_set, experiment),
@@ -365,13 +380,22 @@ class Planner:
                            if random.config.squash_z else [])
     return [step for step in (source, frozen, *controls, scratch) if step is not None]
 
+  def frozen_rows(self, experiment: str, variants=("",)) -> list:
+    """transfer (the unseen tasks of both sets) or sparse, once per source variant; the
+    steps two variants share (the full-action run) once."""
+    sets = ("unseen-set1", "unseen-set2") if experiment == "transfer" else ("sparse",)
+    steps = [step for variant in variants for task_set in sets
+             for step in self.frozen_synergies(task_set, experiment, variant)]
+    return list({step.name: step for step in steps}.values())
+
   def plan(self, experiment: str) -> list:
     if experiment in TABLES:  # one table's rows: a part of `all`, hours rather than a day on 2 cores
       task_set = TABLES[experiment]
       return select(self.plan(f"discosyn-{task_set}") + self.plan(f"baselines-{task_set}"),
                     PAPER_ROWS[task_set])
     if experiment == "all":  # set #2 last: its runs are the long ones
-      parts = [self.plan(part) for part in ("table1", "sparse", "transfer", "table2")]
+      parts = [self.plan("table1"), self.frozen_rows("sparse"), self.frozen_rows("transfer"),
+               self.plan("table2")]
       steps: dict[str, Any] = {}  # a step parts share (the decoder transfer freezes) runs once
       for step in (step for part in parts for step in part):
         steps.setdefault(step.name, step)
@@ -391,11 +415,8 @@ class Planner:
       return list({step.name: step for step in steps}.values())  # one Random<b>-L for both
     if experiment.startswith("baselines-") and experiment[10:] in DISCOSYN_SIZES:
       return self.baselines(experiment[10:])
-    if experiment == "transfer":
-      return self.frozen_synergies("unseen-set1", "transfer") + \
-          self.frozen_synergies("unseen-set2", "transfer")
-    if experiment == "sparse":
-      return self.frozen_synergies("sparse", "sparse")
+    if experiment in ("transfer", "sparse"):  # the paper's rows, then the residual's
+      return self.frozen_rows(experiment, ("", presets.RESIDUAL_SUFFIX))
     raise ValueError(f"unknown experiment {experiment!r}; experiments: {', '.join(EXPERIMENTS)}")
 
 

@@ -9,6 +9,7 @@ Writes OUT/REPORT.md and PNG figures beside it:
   - explained variance of the sequential baselines' PCA / autoencoder fits;
   - training curves (evaluation success against env steps of that task, per method);
   - t-SNE of the z the DiscoSyn policy picks, coloured by task (the paper's Fig. 6);
+  - for rows with a residual beside the synergies, how much of the action each part carries;
   - transfer to unseen tasks and the sparse goal valve: per method and task the final
     success, the mean over the curve, the env steps to the threshold, and for the sparse
     valve the env steps to the first reward; curves;
@@ -36,10 +37,9 @@ from typing import Any
 
 import numpy as np
 
-from discosyn_jax.run import layout, logs
 from discosyn_jax.experiments import intervals, record, report_figures
 from discosyn_jax.experiments.presets import REWARDED
-from discosyn_jax.experiments.report_runs import Run, find, order
+from discosyn_jax.experiments.report_runs import Run, find, metrics, order
 from discosyn_jax import tasks
 from discosyn_jax.tasks import TASK_SETS
 
@@ -156,7 +156,7 @@ def decoder_table(runs: list[Run], last: int = 10) -> str:
   lines = ["| run | env steps | W change | principal cosines | decoder / heads grad norm "
            "| bonus / reward per step |", "|---|---|---|---|---|---|"]
   for run in sorted(runs, key=lambda r: (r.task_set, r.method, r.seed)):
-    rows = [r for r in logs.read_log(run.path / layout.METRICS_FILE) if "decoder/change" in r][-last:]
+    rows = [r for r in metrics(run) if "decoder/change" in r][-last:]
     if not rows:
       continue
     end = rows[-1]
@@ -170,6 +170,30 @@ def decoder_table(runs: list[Run], last: int = 10) -> str:
     lines.append(f"| {run.method} {run.task_set} seed {run.seed} | {end['env_steps']:,.0f} | "
                  f"{end['decoder/change']:.1%} | {cosines} | {mean('grad_norm/decoder'):.3g}"
                  f"{frozen} / {mean('grad_norm/heads'):.3g} | {bonus:.3f} / {reward:.3f} |")
+  return "\n".join(lines) + "\n" if len(lines) > 2 else ""
+
+
+def residual_table(runs: list[Run], last: int = 10) -> str:
+  """Do the synergies still do the work? Per method, set and task with a residual beside
+  the decoder: the mean |D(z)| and rho |r| per actuator, and their ratio, over the last `last`
+  logged train steps (agent/residual.py), over seeds."""
+  lines = ["| method | set | task | rho at the end | synergies' share abs(D(z)) | residual's "
+           "share rho abs(r) | residual / synergies |", "|---|---|---|---|---|---|---|"]
+  with_residual = [r for r in runs if r.config.residual > 0]
+  for task_set in sorted({r.task_set for r in with_residual}):
+    for method in order({r.method for r in with_residual if r.task_set == task_set}):
+      group = [r for r in with_residual if r.task_set == task_set and r.method == method]
+      ends = [[row for row in metrics(r)
+               if "residual/rho" in row][-last:] for r in group]
+      ends = [rows for rows in ends if rows]
+      if not ends:
+        continue
+      rho = np.array([rows[-1]["residual/rho"] for rows in ends])
+      for task in group[0].config.tasks:
+        mean = lambda key: np.array([np.mean([row[key] for row in rows]) for rows in ends])
+        synergy, res = mean(f"{task}/action_synergy"), mean(f"{task}/action_residual")
+        lines.append(f"| {method} | {task_set} | {task} | {_spread(rho)} | {_spread(synergy)} | "
+                     f"{_spread(res)} | {_spread(res / synergy)} |")
   return "\n".join(lines) + "\n" if len(lines) > 2 else ""
 
 
@@ -212,7 +236,7 @@ def discovery_table(runs: list[Run]) -> str:
 def _last_logged(run: Run) -> dict[str, Any]:
   """The decoder's figures at the last logged train step of a run ({} if none): the
   overlap with its start derived from the cosines for logs older than that metric."""
-  rows = [r for r in logs.read_log(run.path / layout.METRICS_FILE) if "decoder/change" in r]
+  rows = [r for r in metrics(run) if "decoder/change" in r]
   if not rows:
     return {}
   end = dict(rows[-1])
@@ -227,7 +251,7 @@ def first_reward(run: Run, task: str) -> int | None:
   """Env steps of the task until the first non-zero reward of `task` in training, or None
   when none was seen (or the run did not log it)."""
   cfg = run.config
-  for row in logs.read_log(run.path / layout.METRICS_FILE):
+  for row in metrics(run):
     t = row.get(f"{task}/first_reward_t")
     if t is not None and t < cfg.unroll_length:
       before = row["step"] - 1  # train steps before the one that saw it
@@ -473,6 +497,13 @@ def _write(runs, fits, paths, out: pathlib.Path, threshold: float, with_tsne: bo
               "one it started from: relative change, and the cosines of the principal angles "
               "between the two subspaces (1: the same subspace). A frozen decoder shows 0 and 1.",
               "", movement]
+
+  shares = residual_table(runs)
+  if shares:
+    lines += ["## Do the synergies still do the work?", "",
+              "Rows with a residual beside the synergies (a = D(z) + rho r): the mean absolute "
+              "action per actuator each part carries, over the last 10 logged train steps. "
+              "Cells: mean (min–max) [seeds].", "", shares]
 
   discovered = discovery_table(main)
   if discovered:

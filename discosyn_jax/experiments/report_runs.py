@@ -74,6 +74,12 @@ def action_size(task: str, hand: str) -> int:
   return len(hands.actuators(hand))
 
 
+def metrics(run: Run) -> list[dict[str, Any]]:
+  """A run's train-step metrics at its record's precision, whether its log or its record is
+  read: the report from a run and from its record (`discosyn keep`) are the same."""
+  return logs.read_log(run.path / layout.METRICS_FILE, as_archived=True)
+
+
 def _method_of(config: TrainConfig) -> str:
   from discosyn_jax.synergies import fitting
 

@@ -50,12 +50,15 @@ def read_jsonl(path: pathlib.Path) -> list[dict]:
   return rows
 
 
-def read_log(path: pathlib.Path) -> list[dict]:
-  """The rows of the log at `path` or of its archive `path`.xz; none when neither exists."""
+def read_log(path: pathlib.Path, as_archived: bool = False) -> list[dict]:
+  """The rows of the log at `path` or of its archive `path`.xz; none when neither exists.
+  `as_archived`: the numbers at the archive's precision either way (a run and its record
+  then read the same)."""
   path = pathlib.Path(path)
   for candidate in (path, path.with_name(path.name + ARCHIVED)):
     if candidate.is_file():
-      return read_jsonl(candidate)
+      rows = read_jsonl(candidate)
+      return [{k: _archived(v) for k, v in row.items()} for row in rows] if as_archived else rows
   return []
 
 

@@ -19,7 +19,8 @@ from brax.envs.base import Env  # noqa: E402
 from discosyn_jax.config import PHYSICS  # noqa: E402
 from discosyn_jax.env import hands  # noqa: E402
 from discosyn_jax.env.hand_env import HandEnv  # noqa: E402
-from discosyn_jax.env.task import Task, TaskConfig, TaskError  # noqa: E402
+from discosyn_jax.env.task import (Task, TaskConfig, TaskError, label,  # noqa: E402, F401
+                                   traceback_frames)
 from discosyn_jax.tasks import dice, planted, screw, valve, valve_goal, weight_pull  # noqa: E402
 from discosyn_jax.tasks.sets import TASK_SETS  # noqa: E402
 
@@ -151,7 +152,7 @@ def _load_failed(where: str, path: pathlib.Path, err: Exception) -> str:
   """One line for a task file that fails while it is run: where in the file, and what."""
   if isinstance(err, SyntaxError):
     return f"{where}:{err.lineno}: SyntaxError: {err.msg}"
-  line = next((tb.tb_lineno for tb in reversed(list(_frames(err.__traceback__)))
+  line = next((tb.tb_lineno for tb in reversed(list(traceback_frames(err.__traceback__)))
                if pathlib.Path(tb.tb_frame.f_code.co_filename).resolve() == path), None)
   message = next(iter(str(err).strip().splitlines()), "")
   text = f"{where}{f':{line}' if line else ''}: {type(err).__name__}{': ' + message if message else ''}"
@@ -159,17 +160,6 @@ def _load_failed(where: str, path: pathlib.Path, err: Exception) -> str:
   if isinstance(err, ModuleNotFoundError) and moved:
     text += f" (`{err.name}` is now `{moved}`: `from {moved} import ...`)"
   return text
-
-
-def _frames(tb):
-  while tb is not None:
-    yield tb
-    tb = tb.tb_next
-
-
-def label(name: str) -> str:
-  """A task's name as a file name: a task of one's own by its class ("Knob")."""
-  return name.rpartition(":")[2]
 
 
 def entry(name: str) -> Entry:

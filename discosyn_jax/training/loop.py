@@ -23,7 +23,7 @@ from discosyn_jax import checks
 from discosyn_jax import config as config_lib
 from discosyn_jax.agent import networks
 from discosyn_jax.config import TrainConfig
-from discosyn_jax.env.task import not_finite
+from discosyn_jax.env.task import label, not_finite
 from discosyn_jax.run import checkpoints, layout, logs, owner, reading, stop
 from discosyn_jax.synergies import fitting, priors
 from discosyn_jax.training import evaluation
@@ -278,8 +278,7 @@ def _check_finite(own_values: dict, metrics: dict, step: int) -> None:
   for name, values in own_values.items():
     bad = [part for part, finite in values.items() if not finite]
     if bad:
-      own = name.rpartition(":")[2]  # a task of one's own ("file.py:Slider") by its class
-      raise TaskNotFinite(not_finite(own, bad, f"at train step {step}") +
+      raise TaskNotFinite(not_finite(label(name), bad, f"at train step {step}") +
                           "; training stopped")
   if not metrics["finite"] or not math.isfinite(metrics["loss"]):
     raise TrainingDiverged(f"non-finite loss or parameters at step {step}; training stopped")

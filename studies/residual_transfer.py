@@ -1,0 +1,66 @@
+"""Which residual cap for a frozen decoder on tasks it was not learned for: the frozen runs
+that `discosyn experiment transfer` / `sparse` made from the residual row's decoder
+(`<experiment>-synergies-residual-...`, cap 0.3 ramped in over the first half), trained
+again with other caps, the same config otherwise, one run at a time; then a table per cap
+and seed: per task the final success and its mean over the evaluation curve, and the
+action shares at the end.
+
+  python -m studies.residual_transfer --runs runs/residual-frozen --caps 0.6 1.0 \
+      --frozen transfer-synergies-residual-set1 --seeds 0 1 2 --out runs/residual-transfer-caps
+"""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+
+
+def summary(run_dir: pathlib.Path) -> dict[str, tuple[float, float, float | None, float | None]]:
+  """Per task: final success, its mean over the curve, |D(z)| and rho |r| at the end."""
+  from discosyn_jax.run import layout, logs
+
+  evals = logs.read_log(run_dir / layout.EVAL_FILE)
+  last = logs.read_log(run_dir / layout.METRICS_FILE)[-1]
+  names = sorted(k.removesuffix("/success") for k in evals[-1] if k.endswith("/success"))
+  return {t: (evals[-1][f"{t}/success"], sum(r[f"{t}/success"] for r in evals) / len(evals),
+              last.get(f"{t}/action_synergy"), last.get(f"{t}/action_residual")) for t in names}
+
+
+def main(argv=None):
+  parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  parser.add_argument("--runs", type=pathlib.Path, default=pathlib.Path("runs/residual-frozen"),
+                      help="the experiment's folder, which holds the frozen runs")
+  parser.add_argument("--frozen", default="transfer-synergies-residual-set1",
+                      help="the frozen runs' folder name before -seed<n>")
+  parser.add_argument("--caps", type=float, nargs="+", default=[0.6, 1.0])
+  parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+  parser.add_argument("--steps", type=int, help="train steps (default: the frozen run's)")
+  parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("runs/residual-transfer-caps"))
+  args = parser.parse_args(argv)
+
+  from discosyn_jax import tasks
+  from discosyn_jax.experiments import record
+  from discosyn_jax.training import loop
+
+  rows = []
+  for seed in args.seeds:
+    source = args.runs / f"{args.frozen}-seed{seed}"
+    rows.append((source.name, summary(source)))
+    for cap in args.caps:
+      config = record.saved_config(source).replace(residual=cap)
+      config = (config if args.steps is None else config.replace(steps=args.steps)).validate()
+      run_dir = args.out / f"{args.frozen}-cap{cap:g}-seed{seed}"
+      if not (run_dir / "final").exists():  # one run at a time; a finished one is kept
+        loop.train(config, run_dir, make_trainer=tasks.trainer, force=run_dir.exists(),
+                   progress=False, log=lambda *a: None)
+      rows.append((run_dir.name, summary(run_dir)))
+  print("| run | task | final success | mean over the curve | abs D(z) | rho abs(r) |")
+  print("|---|---|---|---|---|---|")
+  share = lambda value: "–" if value is None else f"{value:.3f}"
+  for name, per_task in rows:
+    for task, (final, curve, synergy, residual) in per_task.items():
+      print(f"| {name} | {task} | {final:.2f} | {curve:.2f} | {share(synergy)} | {share(residual)} |")
+
+
+if __name__ == "__main__":
+  main()
