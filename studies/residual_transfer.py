@@ -12,6 +12,7 @@ action shares at the end.
 from __future__ import annotations
 
 import argparse
+import json
 import pathlib
 
 
@@ -24,6 +25,20 @@ def summary(run_dir: pathlib.Path) -> dict[str, tuple[float, float, float | None
   names = sorted(k.removesuffix("/success") for k in evals[-1] if k.endswith("/success"))
   return {t: (evals[-1][f"{t}/success"], sum(r[f"{t}/success"] for r in evals) / len(evals),
               last.get(f"{t}/action_synergy"), last.get(f"{t}/action_residual")) for t in names}
+
+
+def label(source: pathlib.Path, run_dir: pathlib.Path, config) -> None:
+  """The run's experiment.json: the frozen run's, its method named by this run's residual
+  ('DiscoSyn3-L-reward-res0.3r150 frozen-res1r150'), so `discosyn report` shows it as a
+  transfer row of its own."""
+  from discosyn_jax.experiments import record
+  from discosyn_jax.run import layout
+  from discosyn_jax.synergies import fitting
+
+  meta = json.loads((source / layout.EXPERIMENT_FILE).read_text())
+  frozen = fitting.residual_suffix(record.saved_config(source))
+  meta["method"] = meta["method"].removesuffix(frozen) + fitting.residual_suffix(config)
+  (run_dir / layout.EXPERIMENT_FILE).write_text(json.dumps(meta) + "\n")
 
 
 def main(argv=None):
@@ -53,6 +68,9 @@ def main(argv=None):
       if not (run_dir / "final").exists():  # one run at a time; a finished one is kept
         loop.train(config, run_dir, make_trainer=tasks.trainer, force=run_dir.exists(),
                    progress=False, log=lambda *a: None)
+      if not record.complete(run_dir, config):  # what `discosyn keep` copies
+        record.write(run_dir, *loop.load_trained(run_dir / "final", tasks.trainer))
+      label(source, run_dir, config)
       rows.append((run_dir.name, summary(run_dir)))
   print("| run | task | final success | mean over the curve | abs D(z) | rho abs(r) |")
   print("|---|---|---|---|---|---|")

@@ -228,7 +228,7 @@ def test_a_bad_residual_flag_is_one_line_exit_2_and_nothing_made(argv, line, tmp
 
 
 def test_transfer_and_sparse_freeze_the_residual_rows_decoder_and_act_with_its_residual(tmp_path):
-  from discosyn_jax.experiments import paper, presets
+  from discosyn_jax.experiments import paper, presets, report_runs
 
   planner = paper.Planner(tmp_path, "cpu", 0)
   steps = planner.plan("transfer") + planner.plan("sparse")
@@ -252,6 +252,8 @@ def test_transfer_and_sparse_freeze_the_residual_rows_decoder_and_act_with_its_r
     paper_row = by_method[experiment, task_set, f"DiscoSyn{b}-L-reward frozen"]
     assert paper_row.config.residual == 0.0
     assert by_method[experiment, task_set, "PPO"].config.residual == 0.0
+    # a run without its experiment.json is named from its config the same way
+    assert report_runs._method_of(frozen.config) == f"DiscoSyn{b}-L frozen-res0.3r{half}"
   names = [s.name for s in planner.plan("transfer")]
   assert len(names) == len(set(names))
   assert sum(n.startswith("transfer-ppo-set1") for n in names) == 1

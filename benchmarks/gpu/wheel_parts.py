@@ -1,8 +1,8 @@
 """The wheels of .whl/ in folders small enough to travel one per call to a GPU machine, and
 joined again there: what a call carries beside the tracked tree is bounded (the tree is
-~31 MB, a call 64 MiB in all), and warp-lang's wheel alone is 149 MB.
+~35 MB, a call 64 MiB in all), and warp-lang's wheel alone is 149 MB.
 
-  python benchmarks/gpu/wheel_parts.py split [--mb 30]   # .whl/*.whl -> .whl-parts/1, 2, ...
+  python benchmarks/gpu/wheel_parts.py split [--mb 25]   # .whl/*.whl -> .whl-parts/1, 2, ...
   python benchmarks/gpu/wheel_parts.py join              # .whl-parts/* -> .whl/ (checked)
 
 `split` packs whole wheels into parts first-fit and cuts a wheel larger than a part into
@@ -95,7 +95,7 @@ def join(parts: pathlib.Path, wheels: pathlib.Path) -> list[pathlib.Path]:
 def main(argv=None) -> int:
   parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
   parser.add_argument("command", choices=["split", "join"])
-  parser.add_argument("--mb", type=float, default=30.0, help="MB a part holds at most (split)")
+  parser.add_argument("--mb", type=float, default=25.0, help="MB a part holds at most (split)")
   parser.add_argument("--wheels", type=pathlib.Path, default=ROOT / ".whl")
   parser.add_argument("--parts", type=pathlib.Path, default=ROOT / ".whl-parts")
   args = parser.parse_args(argv)

@@ -19,4 +19,4 @@ PYTHON="${PYTHON:-python3}"
   --platform any -d .whl "${WHEELS[@]}"
 du -ch .whl/*.whl | tail -1
 # what one call carries beside the tracked tree: .whl-parts/1, 2, ... (wheel_parts.py)
-"$PYTHON" benchmarks/gpu/wheel_parts.py split --mb "${PART_MB:-30}"
+"$PYTHON" benchmarks/gpu/wheel_parts.py split --mb "${PART_MB:-25}"

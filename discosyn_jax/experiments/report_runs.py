@@ -87,10 +87,11 @@ def _method_of(config: TrainConfig) -> str:
     return "PPO"
   if not config.decoder_from:
     return fitting.method_name(config)
+  residual = fitting.residual_suffix(config)  # what the frozen run acts with beside it
   try:  # a synergy file knows its method (PCA, AE); a run folder is DiscoSyn's
-    return fitting.method_name(fitting.read(config.decoder_from)[0]) + " frozen"
+    return fitting.method_name(fitting.read(config.decoder_from)[0]) + " frozen" + residual
   except ValueError:
-    return fitting.method_name(config) + " frozen"
+    return fitting.method_name(config).removesuffix(residual) + " frozen" + residual
 
 
 def _set_of(config: TrainConfig) -> str:
