@@ -353,9 +353,9 @@ class Planner:
       meta, method = fitting.meta_of(source.config), source.meta["method"]
       path = self.out / source.name / layout.DECODER_FILE  # the record of its run
     changes = fitting.frozen_fields(meta, path)
-    if base.residual and not changes["decoder_noise"]:
-      return []  # a fitted space (--decoder-from) acts with its mean: no noise for a residual
     if base.residual:
+      if not changes["decoder_noise"]:
+        return []  # a fitted space (--decoder-from) acts with its mean: no noise for a residual
       changes["residual_ramp_steps"] = max(1, self.sizes.train_for(task_set)["steps"] // 2)
     config = self._config(base, task_set, **changes)
     # named by its source row and its own residual: "DiscoSyn3-L-reward frozen",
