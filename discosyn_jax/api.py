@@ -74,6 +74,22 @@ class Run:
             if f"{task}/success" in row]
     return sum(rows) / len(rows) if rows else float("nan")
 
+  @property
+  def curve(self) -> dict[str, float]:
+    """Each task's success averaged over the evaluations: its area under the curve."""
+    return {task: sum(values) / len(values) for task in self.config.tasks
+            if (values := [row[f"{task}/success"] for row in self.evaluations
+                           if f"{task}/success" in row])}
+
+  def action_shares(self, last: int = 10) -> dict[str, tuple[float, float]]:
+    """Each task's mean |D(z)| and mean rho |r| per actuator over the `last` logged train
+    steps, as the report's residual table reads them: how much of the action the synergies
+    and the residual carry ({} for a run without a residual)."""
+    rows = [row for row in self.metrics if "residual/rho" in row][-last:]
+    mean = lambda key: sum(row[key] for row in rows) / len(rows)
+    return {task: (mean(f"{task}/action_synergy"), mean(f"{task}/action_residual"))
+            for task in self.config.tasks if rows and f"{task}/action_residual" in rows[-1]}
+
 
 def read_run(path: str | pathlib.Path) -> Run:
   """A run folder, or a run's record kept without checkpoints (docs/results/...), as a Run."""

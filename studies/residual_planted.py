@@ -13,7 +13,6 @@ succeed without the residual: success alone undersells what the part outside cos
 from __future__ import annotations
 
 import argparse
-import json
 import pathlib
 
 VARIANTS = {  # name: the residual's fields
@@ -49,23 +48,19 @@ def config_for(variant: str, seed: int, task_names, steps: int | None):
 def summary(run_dir: pathlib.Path) -> dict:
   """Final success, its mean over the evaluation curve, the final return, the action shares
   and the overlap with the planted span at the end (each a mean over the tasks)."""
-  from discosyn_jax.run import layout, logs
+  import discosyn_jax as ds
 
-  config = json.loads((run_dir / layout.CONFIG_FILE).read_text())
-  evals = logs.read_jsonl(run_dir / layout.EVAL_FILE)
-  metrics = logs.read_jsonl(run_dir / layout.METRICS_FILE)
-  names = config["tasks"]
-  mean = lambda row, key: sum(row[f"{t}/{key}"] for t in names) / len(names)
-  success = [mean(row, "success") for row in evals]
-  last = metrics[-1]
-  share = lambda key: (sum(last[f"{t}/{key}"] for t in names) / len(names)
-                       if f"{names[0]}/{key}" in last else None)  # logged with a residual
-  overlap = next((row["decoder/overlap_planted"] for row in reversed(metrics)
+  run = ds.read_run(run_dir)
+  mean = lambda values: sum(values) / len(values) if values else None
+  shares = run.action_shares().values()
+  overlap = next((row["decoder/overlap_planted"] for row in reversed(run.metrics)
                   if "decoder/overlap_planted" in row), float("nan"))
-  return {"env_steps": evals[-1].get("env_steps"), "final": success[-1],
-          "curve": sum(success) / len(success), "return": mean(evals[-1], "return"),
-          "synergy": share("action_synergy"),
-          "residual": share("action_residual"), "overlap": overlap}
+  last = run.evaluations[-1]
+  return {"env_steps": last.get("env_steps"), "final": mean(list(run.success.values())),
+          "curve": run.mean_success,
+          "return": mean([last[f"{t}/return"] for t in run.config.tasks]),
+          "synergy": mean([s for s, _ in shares]), "residual": mean([r for _, r in shares]),
+          "overlap": overlap}
 
 
 def main(argv=None):

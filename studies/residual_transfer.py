@@ -18,13 +18,21 @@ import pathlib
 
 def summary(run_dir: pathlib.Path) -> dict[str, tuple[float, float, float | None, float | None]]:
   """Per task: final success, its mean over the curve, |D(z)| and rho |r| at the end."""
-  from discosyn_jax.run import layout, logs
+  import discosyn_jax as ds
 
-  evals = logs.read_log(run_dir / layout.EVAL_FILE)
-  last = logs.read_log(run_dir / layout.METRICS_FILE)[-1]
-  names = sorted(k.removesuffix("/success") for k in evals[-1] if k.endswith("/success"))
-  return {t: (evals[-1][f"{t}/success"], sum(r[f"{t}/success"] for r in evals) / len(evals),
-              last.get(f"{t}/action_synergy"), last.get(f"{t}/action_residual")) for t in names}
+  run = ds.read_run(run_dir)
+  shares = run.action_shares()
+  return {t: (run.success[t], run.curve[t], *shares.get(t, (None, None))) for t in run.success}
+
+
+def print_table(rows) -> None:
+  """A markdown row per run and task of [(run name, summary(run_dir))]."""
+  print("| run | task | final success | mean over the curve | abs D(z) | rho abs(r) |")
+  print("|---|---|---|---|---|---|")
+  share = lambda value: "–" if value is None else f"{value:.3f}"
+  for name, per_task in rows:
+    for task, (final, curve, synergy, residual) in per_task.items():
+      print(f"| {name} | {task} | {final:.2f} | {curve:.2f} | {share(synergy)} | {share(residual)} |")
 
 
 def label(source: pathlib.Path, run_dir: pathlib.Path, config) -> None:
@@ -72,12 +80,7 @@ def main(argv=None):
         record.write(run_dir, *loop.load_trained(run_dir / "final", tasks.trainer))
       label(source, run_dir, config)
       rows.append((run_dir.name, summary(run_dir)))
-  print("| run | task | final success | mean over the curve | abs D(z) | rho abs(r) |")
-  print("|---|---|---|---|---|---|")
-  share = lambda value: "–" if value is None else f"{value:.3f}"
-  for name, per_task in rows:
-    for task, (final, curve, synergy, residual) in per_task.items():
-      print(f"| {name} | {task} | {final:.2f} | {curve:.2f} | {share(synergy)} | {share(residual)} |")
+  print_table(rows)
 
 
 if __name__ == "__main__":

@@ -90,6 +90,24 @@ def test_train_evaluate_and_read_a_run_through_the_api(tmp_path):
   assert set(ds.evaluate(tmp_path / "run", episodes=2)) == {"planted0"}
 
 
+def test_a_runs_curve_and_action_shares_read_from_its_logs(tmp_path):
+  config = ds.TrainConfig(tasks=("planted0", "planted1"), residual=0.3).validate()
+  evaluations = [{"planted0/success": 0.0, "planted1/success": 0.5},
+                 {"planted0/success": 1.0, "planted1/success": 0.5, "env_steps": 10}]
+  metrics = [{"loss": 1.0}] + [{"residual/rho": 0.3, "planted0/action_synergy": float(i),
+                                "planted0/action_residual": 0.1 * i,
+                                "planted1/action_synergy": 1.0,
+                                "planted1/action_residual": 0.2} for i in range(12)]
+  run = ds.Run(tmp_path, config, evaluations, metrics)
+  assert run.success == {"planted0": 1.0, "planted1": 0.5}
+  assert run.curve == {"planted0": 0.5, "planted1": 0.5}
+  assert run.mean_success == pytest.approx(0.5)
+  shares = run.action_shares(last=4)  # steps 8-11
+  assert shares["planted0"] == pytest.approx((9.5, 0.95))
+  assert shares["planted1"] == pytest.approx((1.0, 0.2))
+  assert ds.Run(tmp_path, config, evaluations, metrics[:1]).action_shares() == {}
+
+
 def test_a_preset_by_name_and_a_bad_one():
   with pytest.raises(ValueError, match="unknown preset 'nope'"):
     ds.train("nope")

@@ -100,6 +100,28 @@ def test_the_default_row_of_each_set():
   assert report.default_method("set1", ["PPO", "PCA4"]) is None
 
 
+def test_the_row_with_a_residual_is_measured_against_the_others():
+  from types import SimpleNamespace as ns
+
+  res, control = "DiscoSyn3-L-reward-res0.3r150", "Random3-L-zfree-res0.3r150"
+  rows = {"DiscoSyn3-L-reward": 0.0, res: 0.3, control: 0.3, "PPO": 0.0}
+  runs = [ns(method=m, config=ns(residual=rho)) for m, rho in rows.items()]
+  assert report.residual_methods(runs, rows) == [res]
+  assert report.residual_methods([r for r in runs if r.method != res], rows) == []
+
+  x = np.array([[0.5, 1.0], [0.75, 1.0], [1.0, 0.75]])
+  matrices = {kind: {res: x, control: x.copy(), "PPO": x * 0} for kind in report.SCORES}
+  table = report.improvement_table(matrices, res)
+  lines = table.splitlines()
+  assert lines[0] == (f"| method | runs | P({res} > row), final success | "
+                      f"P({res} > row), mean over the curve |")
+  assert len(lines) == 4 and not any(line.startswith(f"| {res} |") for line in lines)
+  cells = lines[2].split(" | ")
+  assert cells[:2] == [f"| {control}", "3"] and len(cells) == 4
+  assert all(c.startswith("0.50 [") and "] not separated at 3 (no gap)" in c for c in cells[2:])
+  assert lines[3] == "| PPO | 3 | " + " | ".join(["1.00 [1.00, 1.00] above"] * 2) + " |"
+
+
 def test_the_report_gives_every_set_its_intervals_and_profile_the_same_every_time(tmp_path):
   folder = tmp_path / "report-ci"
   shutil.copytree(FIXTURE, folder)

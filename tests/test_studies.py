@@ -52,3 +52,11 @@ def test_the_task_calibration_runs_a_policy(capsys):
 def test_the_valve_calibration_runs_a_valve(capsys):
   study("valve_calibration").main(["--valves", "valve0", "--episodes", "2"])
   assert "valve0" in capsys.readouterr().out
+
+
+def test_the_residual_schedule_study_refuses_a_preset_without_a_residual(capsys, tmp_path):
+  with pytest.raises(SystemExit) as stop:
+    study("residual_schedule").main(["--preset", "set2-disco6-linear", "--out", str(tmp_path)])
+  assert stop.value.code == 2
+  assert "set2-disco6-linear has no residual" in capsys.readouterr().err
+  assert not any(tmp_path.iterdir())  # nothing trained, nothing written

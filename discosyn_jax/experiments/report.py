@@ -192,7 +192,8 @@ def residual_table(runs: list[Run], last: int = 10) -> str:
       for task in group[0].config.tasks:
         mean = lambda key: np.array([np.mean([row[key] for row in rows]) for rows in ends])
         synergy, res = mean(f"{task}/action_synergy"), mean(f"{task}/action_residual")
-        lines.append(f"| {method} | {task_set} | {task} | {_spread(rho)} | {_spread(synergy)} | "
+        lines.append(f"| {method} | {task_set} | {tasks.label(task)} | {_spread(rho)} | "
+                     f"{_spread(synergy)} | "
                      f"{_spread(res)} | {_spread(res / synergy)} |")
   return "\n".join(lines) + "\n" if len(lines) > 2 else ""
 
@@ -346,7 +347,9 @@ INTERVALS_TEXT = (
     f"intervals (runs resampled within each task; rliable, {intervals.REPS:,} replications, "
     f"seed {intervals.SEED}). *above* / *below*: the interval of P lies above / below 0.5; "
     "else *not separated at n* seeds, with the seeds per row that would separate them if the "
-    "gap held: the interval's half-width towards 0.5 scaled by sqrt(n / n'). The profiles: "
+    "gap held: the interval's half-width towards 0.5 scaled by sqrt(n / n'). Where a set has "
+    "DiscoSyn rows with a residual beside their synergies, a table for each gives P(that row > "
+    "row) for each other row, with the same intervals. The profiles: "
     "the fraction of runs x tasks above each success level, with its band, for the default, "
     "PPO and the three rows of the highest final IQM.")
 
@@ -366,6 +369,14 @@ def _improvement_cell(p: intervals.Estimate, seeds: int) -> str:
   return f"{_interval(p)} {where}"
 
 
+def _improvement_cells(matrices, x: str, y: str) -> list[str]:
+  """P(x > y) per score, each with where it stands."""
+  of = lambda method: {kind: matrices[kind][method] for kind in SCORES}
+  seeds = min(len(matrices["final"][x]), len(matrices["final"][y]))
+  return [_improvement_cell(p, seeds)
+          for p in intervals.probability_of_improvement(of(x), of(y)).values()]
+
+
 def interval_table(matrices: dict[str, dict[str, np.ndarray]], default: str | None) -> str:
   """A row per method: the runs, the IQM and the mean of each score with their intervals,
   and the probability that the default improves on the row."""
@@ -375,17 +386,32 @@ def interval_table(matrices: dict[str, dict[str, np.ndarray]], default: str | No
   lines = ["| " + " | ".join(head) + " |", "|---" * len(head) + "|"]
   of = lambda method: {kind: matrices[kind][method] for kind in SCORES}
   for method in matrices["final"]:
-    runs = len(matrices["final"][method])
-    cells = [method, str(runs)]
+    cells = [method, str(len(matrices["final"][method]))]
     for middle, mean in intervals.aggregates(of(method)).values():
       cells += [_interval(middle), _interval(mean)]
     if default and method == default:
       cells += ["(the default)"] * len(SCORES)
     elif default:
-      seeds = min(runs, len(matrices["final"][default]))
-      found = intervals.probability_of_improvement(of(default), of(method))
-      cells += [_improvement_cell(p, seeds) for p in found.values()]
+      cells += _improvement_cells(matrices, default, method)
     lines.append("| " + " | ".join(cells) + " |")
+  return "\n".join(lines) + "\n"
+
+
+def residual_methods(runs: list[Run], methods) -> list[str]:
+  """The set's learned-synergy rows with a residual (their decoder frozen on unseen tasks and
+  the sparse valve), each measured against the others in a table of its own."""
+  with_residual = {r.method for r in runs if r.config.residual > 0}
+  return [m for m in order(methods) if m in with_residual and m.startswith("DiscoSyn")]
+
+
+def improvement_table(matrices: dict[str, dict[str, np.ndarray]], x: str) -> str:
+  """P(x > row) per score for every other row of the set, with where it stands."""
+  head = ["method", "runs"] + [f"P({x} > row), {name}" for name in SCORES.values()]
+  lines = ["| " + " | ".join(head) + " |", "|---" * len(head) + "|"]
+  for method in matrices["final"]:
+    if method != x:
+      lines.append("| " + " | ".join([method, str(len(matrices["final"][method]))]
+                                      + _improvement_cells(matrices, x, method)) + " |")
   return "\n".join(lines) + "\n"
 
 
@@ -412,8 +438,12 @@ def interval_section(runs: list[Run], task_set: str, out: pathlib.Path) -> list[
   report_figures.profiles({m: {SCORES[k]: matrices[k][m] for k in SCORES} for m in shown},
                           out / name, f"{task_set}: performance profiles")
   labels = ", ".join(map(tasks.label, task_names))
-  return [f"### {task_set}: intervals over runs x tasks ({labels})", "",
-          interval_table(matrices, default), f"![profile {task_set}]({name})", ""]
+  lines = [f"### {task_set}: intervals over runs x tasks ({labels})", "",
+           interval_table(matrices, default), f"![profile {task_set}]({name})", ""]
+  for residual in residual_methods(runs, matrices["final"]):
+    lines += [f"### {task_set}: {residual} against the others", "",
+              improvement_table(matrices, residual), ""]
+  return lines
 
 
 def improvement_of(runs: list[Run], task_set: str, x: str, y: str,

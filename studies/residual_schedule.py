@@ -1,0 +1,67 @@
+"""Which schedule for the residual beside the synergies on a task set: a `-residual` preset
+(cap 0.3 ramped in over the first half of its train steps) trained again with another ramp,
+start or cap, one run at a time, each ending with its record (`discosyn keep`'s files) and an
+experiment.json that names its row by the schedule (DiscoSyn6-L-reward-res0.3r150), so that
+`discosyn report` shows it beside the experiment's rows; then a table per run: per task the
+final success, its mean over the evaluation curve and the action shares at the end.
+
+  python -m studies.residual_schedule --preset set2-disco6-linear-residual --ramp 150 \
+      --seeds 0 1 --out runs/residual-schedule
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+
+
+def main(argv=None):
+  parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+  parser.add_argument("--preset", default="set2-disco6-linear-residual",
+                      help="a residual row's preset (default: %(default)s)")
+  parser.add_argument("--cap", type=float, help="rho's cap (default: the preset's)")
+  parser.add_argument("--ramp", type=int, help="train steps of rho's ramp (default: the preset's)")
+  parser.add_argument("--start", type=int, default=0,
+                      help="train steps rho is held at 0 before its ramp (default: 0)")
+  parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1])
+  parser.add_argument("--steps", type=int, help="train steps (default: the preset's)")
+  parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("runs/residual-schedule"))
+  args = parser.parse_args(argv)
+
+  import discosyn_jax as ds
+  from discosyn_jax import tasks
+  from discosyn_jax.experiments import paper, presets, record
+  from discosyn_jax.run import layout
+  from discosyn_jax.synergies import fitting
+  from discosyn_jax.training import loop
+  from studies.residual_transfer import print_table, summary
+
+  base = presets.preset(args.preset)
+  if not base.residual:
+    parser.error(f"{args.preset} has no residual: pick a preset ending in -residual")
+  task_set = next(name for name, members in ds.TASK_SETS.items()
+                  if tuple(members) == tuple(base.tasks))
+  changes = {"residual": args.cap, "residual_ramp_steps": args.ramp,
+             "residual_start_steps": args.start, "steps": args.steps}
+  base = base.replace(**paper.SCALES["cpu"].train_for(task_set),
+                      **{k: v for k, v in changes.items() if v is not None})
+  rows = []
+  for seed in args.seeds:
+    config = base.replace(seed=seed).validate()
+    method = fitting.method_name(config)
+    run_dir = args.out / f"{method.lower()}-{task_set}-seed{seed}"
+    if not (run_dir / layout.FINAL).exists():  # one run at a time; a finished one is kept
+      loop.train(config, run_dir, make_trainer=tasks.trainer, resume=run_dir.exists(),
+                 progress=False, log=lambda *a: None)
+    if not record.complete(run_dir, config):
+      record.write(run_dir, *loop.load_trained(run_dir / layout.FINAL, tasks.trainer))
+    (run_dir / layout.EXPERIMENT_FILE).write_text(json.dumps(  # a row of its set's table
+        {"experiment": f"discosyn-{task_set}", "method": method, "set": task_set,
+         "seed": seed, "scale": "cpu"}) + "\n")
+    rows.append((run_dir.name, summary(run_dir)))
+  print_table(rows)
+
+
+if __name__ == "__main__":
+  main()
