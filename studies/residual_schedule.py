@@ -12,7 +12,6 @@ final success, its mean over the evaluation curve and the action shares at the e
 from __future__ import annotations
 
 import argparse
-import json
 import pathlib
 
 
@@ -29,19 +28,14 @@ def main(argv=None):
   parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("runs/residual-schedule"))
   args = parser.parse_args(argv)
 
-  import discosyn_jax as ds
-  from discosyn_jax import tasks
-  from discosyn_jax.experiments import paper, presets, record
-  from discosyn_jax.run import layout
+  from discosyn_jax.experiments import paper, presets, report_runs
   from discosyn_jax.synergies import fitting
-  from discosyn_jax.training import loop
-  from studies.residual_transfer import print_table, summary
+  from studies.residual_transfer import print_table, summary, train_row
 
   base = presets.preset(args.preset)
   if not base.residual:
     parser.error(f"{args.preset} has no residual: pick a preset ending in -residual")
-  task_set = next(name for name, members in ds.TASK_SETS.items()
-                  if tuple(members) == tuple(base.tasks))
+  task_set = report_runs.set_of(base)
   changes = {"residual": args.cap, "residual_ramp_steps": args.ramp,
              "residual_start_steps": args.start, "steps": args.steps}
   base = base.replace(**paper.SCALES["cpu"].train_for(task_set),
@@ -50,15 +44,9 @@ def main(argv=None):
   for seed in args.seeds:
     config = base.replace(seed=seed).validate()
     method = fitting.method_name(config)
-    run_dir = args.out / f"{method.lower()}-{task_set}-seed{seed}"
-    if not (run_dir / layout.FINAL).exists():  # one run at a time; a finished one is kept
-      loop.train(config, run_dir, make_trainer=tasks.trainer, resume=run_dir.exists(),
-                 progress=False, log=lambda *a: None)
-    if not record.complete(run_dir, config):
-      record.write(run_dir, *loop.load_trained(run_dir / layout.FINAL, tasks.trainer))
-    (run_dir / layout.EXPERIMENT_FILE).write_text(json.dumps(  # a row of its set's table
-        {"experiment": f"discosyn-{task_set}", "method": method, "set": task_set,
-         "seed": seed, "scale": "cpu"}) + "\n")
+    meta = {"experiment": f"discosyn-{task_set}", "method": method, "set": task_set,
+            "seed": seed, "scale": "cpu"}  # a row of its set's table
+    run_dir = train_row(args.out, f"{method.lower()}-{task_set}-seed{seed}", config, meta)
     rows.append((run_dir.name, summary(run_dir)))
   print_table(rows)
 

@@ -35,8 +35,8 @@ def print_table(rows) -> None:
       print(f"| {name} | {task} | {final:.2f} | {curve:.2f} | {share(synergy)} | {share(residual)} |")
 
 
-def label(source: pathlib.Path, run_dir: pathlib.Path, config) -> None:
-  """The run's experiment.json: the frozen run's, its method named by this run's residual
+def frozen_meta(source: pathlib.Path, config) -> dict:
+  """The frozen run's experiment.json with its method named by this run's residual
   ('DiscoSyn3-L-reward-res0.3r150 frozen-res1r150'), so `discosyn report` shows it as a
   transfer row of its own."""
   from discosyn_jax.experiments import record
@@ -46,7 +46,21 @@ def label(source: pathlib.Path, run_dir: pathlib.Path, config) -> None:
   meta = json.loads((source / layout.EXPERIMENT_FILE).read_text())
   frozen = fitting.residual_suffix(record.saved_config(source))
   meta["method"] = meta["method"].removesuffix(frozen) + fitting.residual_suffix(config)
-  (run_dir / layout.EXPERIMENT_FILE).write_text(json.dumps(meta) + "\n")
+  return meta
+
+
+def train_row(out: pathlib.Path, name: str, config, meta: dict) -> pathlib.Path:
+  """Train `config` into OUT/NAME as a step of `discosyn experiment` does (resumed where
+  unfinished, kept where finished), ending with its record and experiment.json `meta`."""
+  from discosyn_jax import tasks
+  from discosyn_jax.experiments import paper
+
+  step, quiet = paper.Train(name, config, meta), lambda *a: None
+  if step.done(out):
+    step.settle(out, tasks.trainer, quiet)
+  else:
+    step.run(out, tasks.trainer, False, quiet)
+  return out / name
 
 
 def main(argv=None):
@@ -61,9 +75,7 @@ def main(argv=None):
   parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("runs/residual-transfer-caps"))
   args = parser.parse_args(argv)
 
-  from discosyn_jax import tasks
   from discosyn_jax.experiments import record
-  from discosyn_jax.training import loop
 
   rows = []
   for seed in args.seeds:
@@ -72,13 +84,8 @@ def main(argv=None):
     for cap in args.caps:
       config = record.saved_config(source).replace(residual=cap)
       config = (config if args.steps is None else config.replace(steps=args.steps)).validate()
-      run_dir = args.out / f"{args.frozen}-cap{cap:g}-seed{seed}"
-      if not (run_dir / "final").exists():  # one run at a time; a finished one is kept
-        loop.train(config, run_dir, make_trainer=tasks.trainer, force=run_dir.exists(),
-                   progress=False, log=lambda *a: None)
-      if not record.complete(run_dir, config):  # what `discosyn keep` copies
-        record.write(run_dir, *loop.load_trained(run_dir / "final", tasks.trainer))
-      label(source, run_dir, config)
+      run_dir = train_row(args.out, f"{args.frozen}-cap{cap:g}-seed{seed}", config,
+                          frozen_meta(source, config))
       rows.append((run_dir.name, summary(run_dir)))
   print_table(rows)
 

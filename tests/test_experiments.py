@@ -549,7 +549,7 @@ def test_cli_rejects_bad_input(tmp_path, capsys):
 def test_a_set_of_ones_own_tasks_is_named_by_its_classes_and_its_figures_link_as_they_are():
   own = TrainConfig(squash_z=False, decoder_init="random", tasks=("docs/examples/own_set/own_set.py:Press",
                            "docs/examples/own_set/own_set.py:Rake"))
-  assert report_runs._set_of(own) == "Press+Rake"
-  assert report_runs._set_of(TrainConfig(squash_z=False, decoder_init="random", tasks=("valve0", "valve1", "valve2", "valve3"))) == "set1"
+  assert report_runs.set_of(own) == "Press+Rake"
+  assert report_runs.set_of(TrainConfig(squash_z=False, decoder_init="random", tasks=("valve0", "valve1", "valve2", "valve3"))) == "set1"
   assert report.figure_name("curves", "Press+Rake") == "curves-Press_Rake.png"
   assert report.figure_name("overlap", "set1 on leap16") == "overlap-set1_on_leap16.png"

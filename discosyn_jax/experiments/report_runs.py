@@ -94,7 +94,7 @@ def _method_of(config: TrainConfig) -> str:
     return fitting.method_name(config).removesuffix(residual) + " frozen" + residual
 
 
-def _set_of(config: TrainConfig) -> str:
+def set_of(config: TrainConfig) -> str:
   for name, members in TASK_SETS.items():
     if tuple(members) == tuple(config.tasks):
       return name
@@ -114,7 +114,7 @@ def load_run(path: pathlib.Path) -> Run:
   # logs kept without checkpoints (docs/results) are finished when the last step was evaluated
   finished = (path / layout.FINAL).is_dir() or bool(evals and evals[-1]["step"] >= config.steps)
   # derived from the config only where experiment.json is silent (_method_of may read a file)
-  task_set = meta["set"] if "set" in meta else _set_of(config)
+  task_set = meta["set"] if "set" in meta else set_of(config)
   if config.hand != hands.DEFAULT:  # another hand's runs are never pooled with ours
     task_set = f"{task_set} on {hands.label(config.hand)}"
   return Run(path=path, config=config, experiment=meta.get("experiment", "train"),
