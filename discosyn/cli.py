@@ -129,7 +129,12 @@ def build_parser() -> argparse.ArgumentParser:
                  "baselines-set1 | baselines-set2 | transfer | sparse (from the default "
                  "row's decoder, then from the residual row's, acting with its residual); "
                  "the planted-synergy "
-                 "test bed: discosyn-planted | discosyn-planted_slack")
+                 "test bed: discosyn-planted | discosyn-planted_slack; confirm PLAN: the runs of "
+                 "a confirmation plan file, exactly as it gives them "
+                 "(discosyn_jax/experiments/confirm.py)")
+  p.add_argument("plan", nargs="?", help="confirm: the plan file (JSON: rows with their full "
+                 "configs and seeds, hypotheses, the decision); its runs are folders "
+                 "<row>-seed<n> in --out, and `discosyn report` prints its verdicts")
   p.add_argument("--scale", default="cpu", help="ci (seconds per run) | cpu (minutes per run on "
                  "2 cores) | gpu (one accelerator); default: %(default)s")
   p.add_argument("--seeds", type=int, nargs="+",
@@ -181,6 +186,10 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("--threshold", type=float, default=0.8,
                  help="final success rate (a fraction, 0-1) at or above which a task counts as "
                  "solved (default: %(default)s)")
+  p.add_argument("--final-k", type=int, default=3, metavar="K",
+                 help="a run's final success is the mean of its last K evaluations, so that one "
+                 "evaluation cannot swing it (default: %(default)s; a confirmation plan's "
+                 "hypotheses use the plan's own)")
   p.add_argument("--no-tsne", action="store_true", help="skip the t-SNE (it rolls policies out)")
   p.add_argument("--force", action="store_true", help="replace a report already in --out")
   p.set_defaults(fn=commands.cmd_report)

@@ -104,8 +104,8 @@ TRAIN_FLAGS = {
     "decoder_weight_decay_steps": "decoder_weight_decay_steps",
     "decoder_init": "decoder_init", "freeze_decoder": "freeze_decoder", "squash_z": "squash_z",
     "discriminator_target": "discriminator_target", "task_posture": "task_posture",
-    "residual": "residual", "residual_ramp_steps": "residual_ramp_steps",
-    "residual_start_steps": "residual_start_steps",
+    "residual": "residual", "residual_ramp": "residual_ramp", "residual_start": "residual_start",
+    "closing_episodes": "closing_episodes",
 }
 
 
@@ -249,6 +249,10 @@ def cmd_experiment(args) -> None:
   from discosyn_jax.experiments import paper
 
   out = pathlib.Path(args.out)
+  if args.name == "confirm":
+    return _confirm(args, out)
+  if args.plan is not None:
+    raise UsageError(f"a plan file is for `discosyn experiment confirm PLAN`, not {args.name}")
   seeds = tuple(args.seeds) if args.seeds else getattr(paper.SCALES.get(args.scale), "seeds", (0,))
   only = f", methods {' '.join(args.methods)}" if args.methods else ""
   print(f"experiment {args.name} at scale {args.scale}, seeds {' '.join(map(str, seeds))}{only}, "
@@ -257,6 +261,23 @@ def cmd_experiment(args) -> None:
   paper.run(args.name, out, args.scale, seeds, decoder_from=args.decoder_from,
             methods=args.methods, hand=args.hand, progress=args.progress)
   print(f"experiment {args.name} finished in {(time.perf_counter() - start) / 60:.1f} min")
+
+
+def _confirm(args, out: pathlib.Path) -> None:
+  """`discosyn experiment confirm PLAN --out DIR`: the plan's runs, exactly as it gives them."""
+  from discosyn_jax.experiments import confirm
+
+  if args.plan is None:
+    raise UsageError("discosyn experiment confirm PLAN: give the plan file")
+  given = [flag for flag, value in (("--seeds", args.seeds), ("--methods", args.methods),
+                                    ("--decoder-from", args.decoder_from)) if value]
+  if given:
+    raise UsageError(f"a plan gives its rows' configs and seeds: drop {' '.join(given)}")
+  print(f"confirmation plan {args.plan}, in {out}")
+  start = time.perf_counter()
+  confirm.run(args.plan, out, progress=args.progress)
+  print(f"confirmation plan {args.plan} finished in {(time.perf_counter() - start) / 60:.1f} min; "
+        f"its verdicts: discosyn report {shlex.quote(str(out))}")
 
 
 def cmd_keep(args) -> None:
@@ -280,5 +301,5 @@ def cmd_report(args) -> None:
   from discosyn_jax.experiments import report
 
   path = report.write(args.runs, pathlib.Path(args.out), threshold=args.threshold,
-                      with_tsne=not args.no_tsne, force=args.force)
+                      with_tsne=not args.no_tsne, force=args.force, final_k=args.final_k)
   print(path)

@@ -40,7 +40,11 @@ PHYSICS = ("fast", "reference")
 
 # Fields that may differ between a run and its resumption: they change how long and how
 # often, never what the state holds.
-RESUMABLE = frozenset({"steps", "eval_every", "eval_envs", "checkpoint_every", "keep_checkpoints"})
+RESUMABLE = frozenset({"steps", "eval_every", "eval_envs", "checkpoint_every", "keep_checkpoints",
+                       "closing_episodes"})
+# Fields that change neither the state nor the logs of the training run itself: a finished
+# run is the run of a config that differs from its own in these alone (record.finished)
+AFTER_THE_RUN = frozenset({"closing_episodes"})
 MAX_STEPS = 2**31 - 1  # the state counts train steps in an int32
 # Fields added since the first release, each with the value every run before it had: a
 # config.json without them is refused (never filled with today's default) until
@@ -48,8 +52,11 @@ MAX_STEPS = 2**31 - 1  # the state counts train steps in an int32
 ADDED = {"squash_z": False, "physics": "reference", "reset_pool": False, "decoder_weight_decay": 0.0,
          "decoder_weight_decay_steps": 0, "hand": "shadow20",
          "decoder_init": "random", "discriminator_target": "z", "task_posture": False,
-         "residual": 0.0, "residual_ramp_steps": 0, "residual_start_steps": 0,
-         "init_residual_std": 0.05}
+         "residual": 0.0, "residual_ramp": 0.0, "residual_start": 0.0,
+         "init_residual_std": 0.05, "closing_episodes": 0}
+# Fields renamed since a release, read by what they became: the residual's schedule was in
+# train steps until 2026-12-05 and is a share of the run's `steps` since (the same run)
+RENAMED = {"residual_ramp_steps": "residual_ramp", "residual_start_steps": "residual_start"}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -105,11 +112,13 @@ class TrainConfig:
   # r (its mean bounded to [-1, 1]) and the action is the synergies' plus rho r, for motion
   # outside the synergy space; 0-1 (0: no residual, no parameters, no draws)
   residual: float = 0.0
-  # rho rises linearly from 0 to its cap over this many train steps, so that the residual
-  # does not cost the synergies' start (0: the cap from the first step)
-  residual_ramp_steps: int = 0
-  # rho is held at 0 for this many train steps before its ramp (0: the ramp starts at once)
-  residual_start_steps: int = 0
+  # rho rises linearly from 0 to its cap over this share of the run's `steps` (0-1), so that
+  # the residual does not cost the synergies' start (0: the cap from the first step); a share,
+  # so that one schedule means the same at every scale
+  residual_ramp: float = 0.0
+  # rho is held at 0 for this share of the run's `steps` before its ramp (0: the ramp starts
+  # at once)
+  residual_start: float = 0.0
   # initial std of the residual's own noise (small: the residual explores with the
   # decoder's noise, integrated over r)
   init_residual_std: float = 0.05
@@ -157,6 +166,10 @@ class TrainConfig:
   # train steps between deterministic evaluations (0: only at the end)
   eval_every: int = 20
   eval_envs: int = 32  # episodes per task in an evaluation
+  # episodes per task of the closing evaluation that ends every run, kept beside the curve
+  # (closing.json): a final figure that one evaluation of eval_envs episodes cannot swing (0:
+  # none)
+  closing_episodes: int = 128
   checkpoint_every: int = 50  # train steps between checkpoints (0: only the final one)
   keep_checkpoints: int = 3  # periodic checkpoints kept besides `final`
 
@@ -165,6 +178,16 @@ class TrainConfig:
       learned_from_scratch = (self.decoder == "linear" and not self.decoder_from
                               and not self.freeze_decoder)
       object.__setattr__(self, "decoder_init", "reward" if learned_from_scratch else "random")
+
+  @property
+  def residual_start_step(self) -> int:
+    """The train step at which the residual's ramp begins (residual_start of `steps`)."""
+    return round(self.residual_start * self.steps)
+
+  @property
+  def residual_ramp_step_count(self) -> int:
+    """The train steps the residual's ramp lasts (residual_ramp of `steps`)."""
+    return round(self.residual_ramp * self.steps)
 
   @property
   def env_steps_per_train_step(self) -> int:
@@ -218,8 +241,8 @@ class TrainConfig:
     if self.steps > MAX_STEPS:
       raise ValueError(f"steps must be at most {MAX_STEPS}, not {self.steps}")
     for name in ("eval_every", "checkpoint_every", "alpha1", "alpha2", "alpha3", "value_coef",
-                 "decoder_weight_decay", "decoder_weight_decay_steps", "residual_ramp_steps",
-                 "residual_start_steps"):
+                 "decoder_weight_decay", "decoder_weight_decay_steps", "residual_ramp",
+                 "residual_start", "closing_episodes"):
       if getattr(self, name) < 0:
         raise ValueError(f"{name} must not be negative, not {getattr(self, name)}")
     for name in ("policy_hidden", "value_hidden", "decoder_hidden", "discriminator_hidden"):
@@ -242,10 +265,12 @@ class TrainConfig:
     if not 0 <= self.residual <= 1:
       raise ValueError(f"residual (the cap of the residual's weight) must be between 0 and 1, "
                        f"not {self.residual}")
+    if self.residual_start + self.residual_ramp > 1:
+      raise ValueError(f"residual_start + residual_ramp are shares of the run: their sum must be "
+                       f"at most 1, not {self.residual_start + self.residual_ramp:g}")
     if not self.residual:
-      if self.residual_ramp_steps or self.residual_start_steps:
-        raise ValueError("residual_ramp_steps and residual_start_steps schedule a residual: "
-                         "set residual")
+      if self.residual_ramp or self.residual_start:
+        raise ValueError("residual_ramp and residual_start schedule a residual: set residual")
     elif self.decoder == "identity":
       raise ValueError("the identity decoder (full-action PPO) has no room for a residual: its "
                        "heads choose every action; set residual = 0")
@@ -259,6 +284,7 @@ class TrainConfig:
   @classmethod
   def from_dict(cls, values: dict[str, Any]) -> "TrainConfig":
     fields = {f.name: f for f in dataclasses.fields(cls)}
+    values = renamed(values)
     unknown = sorted(set(values) - set(fields))
     if unknown:
       raise ValueError(f"unknown config field(s): {', '.join(unknown)}")
@@ -271,6 +297,20 @@ class TrainConfig:
 
   def replace(self, **changes) -> "TrainConfig":
     return dataclasses.replace(self, **changes)
+
+
+def renamed(values: dict[str, Any]) -> dict[str, Any]:
+  """Config fields under their names of today (RENAMED): an older residual schedule in train
+  steps becomes its share of the run's `steps`."""
+  values = dict(values)
+  for old, new in RENAMED.items():
+    if old in values and new not in values:
+      steps = values.get("steps")
+      count = values.pop(old)
+      if not isinstance(steps, int) or steps < 1 or not isinstance(count, int):
+        raise ValueError(f"{old} = {count!r} cannot become a share of steps = {steps!r}")
+      values[new] = count / steps
+  return values
 
 
 def save(config: TrainConfig, path) -> None:
@@ -289,7 +329,7 @@ def load(path) -> TrainConfig:
   try:
     return TrainConfig.from_dict(values).validate()
   except (TypeError, ValueError) as err:
-    older = sorted(set(ADDED) - set(values))
+    older = sorted(set(ADDED) - set(values) - {RENAMED[k] for k in values if k in RENAMED})
     hint = (f"; a run of an older release: `discosyn upgrade {pathlib.Path(path).parent}` adds "
             f"{', '.join(f'{k} = {json.dumps(ADDED[k])}' for k in older)}, as it ran"
             if older and "missing" in str(err) else "")
@@ -306,22 +346,37 @@ def upgrade(path) -> list[str]:
     raise ValueError(f"malformed config file {path}: {err}") from None
   if not isinstance(values, dict):
     raise ValueError(f"malformed config file {path}: not a JSON object")
+  renames = [old for old in RENAMED if old in values]
+  values = renamed(values)
   added = [k for k in ADDED if k not in values]
   upgraded = {**values, **{k: ADDED[k] for k in added}}
   try:  # the rest must be whole already
     TrainConfig.from_dict(upgraded).validate()
   except (TypeError, ValueError) as err:
     raise ValueError(f"config file {path}: {err}") from None
-  if added:
+  if added or renames:  # in the order of today's fields, as a new run writes them
+    order = [f.name for f in dataclasses.fields(TrainConfig)]
+    upgraded = {k: upgraded[k] for k in sorted(upgraded, key=order.index)}
     atomic.write_text(path, json.dumps(upgraded, indent=1))
-  return added
+  return added + [f"{RENAMED[old]} (was {old})" for old in renames]
 
 
 def mismatches(saved: TrainConfig, requested: TrainConfig) -> list[str]:
   """Fields in which `requested` cannot continue the run that `saved` describes."""
-  return [f"{name} is {getattr(saved, name)!r} in the run but {getattr(requested, name)!r} here"
-          for name in saved.to_dict()
-          if name not in RESUMABLE and getattr(saved, name) != getattr(requested, name)]
+  out = [f"{name} is {getattr(saved, name)!r} in the run but {getattr(requested, name)!r} here"
+         for name in saved.to_dict()
+         if name not in RESUMABLE and getattr(saved, name) != getattr(requested, name)]
+  scheduled = saved.residual and (saved.residual_ramp or saved.residual_start)
+  if scheduled and saved.steps != requested.steps:  # the schedule is a share of steps
+    out.append(f"steps is {saved.steps} in the run but {requested.steps} here, and its residual's "
+               "schedule is a share of steps")
+  return out
+
+
+def same_run(a: TrainConfig, b: TrainConfig) -> bool:
+  """Whether two configs train the same run (they may differ in AFTER_THE_RUN alone)."""
+  strip = lambda c: {k: v for k, v in c.to_dict().items() if k not in AFTER_THE_RUN}
+  return strip(a) == strip(b)
 
 
 @functools.cache

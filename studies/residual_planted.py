@@ -18,8 +18,8 @@ import pathlib
 VARIANTS = {  # name: the residual's fields
     "none": dict(residual=0.0),
     "const0.3": dict(residual=0.3),
-    "ramp0.3": dict(residual=0.3, residual_ramp_steps=200),
-    "ramp0.15": dict(residual=0.15, residual_ramp_steps=200),
+    "ramp0.3": dict(residual=0.3, residual_ramp=0.5),
+    "ramp0.15": dict(residual=0.15, residual_ramp=0.5),
 }
 PRESET = "planted-disco3-linear"
 

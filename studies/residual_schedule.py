@@ -1,6 +1,6 @@
 """Which schedule for the residual beside the synergies on a task set: a `-residual` preset
 (cap 0.3 ramped in over the first half of its train steps) trained again with another ramp,
-start or cap, one run at a time, each ending with its record (`discosyn keep`'s files) and an
+start or cap (in train steps here, stored as the config's shares of the run), one run at a time, each ending with its record (`discosyn keep`'s files) and an
 experiment.json that names its row by the schedule (DiscoSyn6-L-reward-res0.3r150), so that
 `discosyn report` shows it beside the experiment's rows; then a table per run: per task the
 final success, its mean over the evaluation curve and the action shares at the end.
@@ -36,10 +36,11 @@ def main(argv=None):
   if not base.residual:
     parser.error(f"{args.preset} has no residual: pick a preset ending in -residual")
   task_set = report_runs.set_of(base)
-  changes = {"residual": args.cap, "residual_ramp_steps": args.ramp,
-             "residual_start_steps": args.start, "steps": args.steps}
+  changes = {"residual": args.cap, "steps": args.steps}
   base = base.replace(**paper.SCALES["cpu"].train_for(task_set),
                       **{k: v for k, v in changes.items() if v is not None})
+  ramp = base.residual_ramp_step_count if args.ramp is None else args.ramp
+  base = base.replace(residual_ramp=ramp / base.steps, residual_start=args.start / base.steps)
   rows = []
   for seed in args.seeds:
     config = base.replace(seed=seed).validate()

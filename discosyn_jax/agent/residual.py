@@ -1,6 +1,6 @@
 """A residual beside the synergies: each task's head also picks a full-action correction r,
 added to the shared decoder's action with a weight rho(t) that a schedule ramps in and caps
-(TrainConfig.residual, residual_ramp_steps, residual_start_steps). In the spirit of SAR
+(TrainConfig.residual, residual_ramp, residual_start: shares of the run's steps). In the spirit of SAR
 (MyoSuite, RSS 2023: phi * synergy action + (1 - phi) * raw action) and DynSyn (ICML 2024:
 state-dependent per-actuator corrections whose weight ramps up and is capped).
 
@@ -48,11 +48,12 @@ from discosyn_jax.config import TrainConfig
 
 def rho(config: TrainConfig, step) -> jnp.ndarray:
   """The residual's weight at `step` (train steps done, an int or a traced int32): 0 for the
-  first residual_start_steps steps, then rising linearly to the cap `residual` over
-  residual_ramp_steps (at once when 0), then held there."""
-  since = jnp.asarray(step, jnp.float32) - config.residual_start_steps
-  if config.residual_ramp_steps:
-    progress = jnp.clip(since / config.residual_ramp_steps, 0.0, 1.0)
+  first residual_start of the run's steps, then rising linearly to the cap `residual` over
+  residual_ramp of them (at once when 0), then held there. The shares are rounded to whole
+  train steps (TrainConfig.residual_start_step), so a schedule in steps is met exactly."""
+  since = jnp.asarray(step, jnp.float32) - config.residual_start_step
+  if config.residual_ramp_step_count:
+    progress = jnp.clip(since / config.residual_ramp_step_count, 0.0, 1.0)
   else:
     progress = (since >= 0).astype(jnp.float32)
   return config.residual * progress

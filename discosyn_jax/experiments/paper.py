@@ -152,7 +152,7 @@ class Train:
     run_dir = out / self.name
     if not (run_dir / layout.EXPERIMENT_FILE).is_file():
       self.label(out)
-    if not record.complete(run_dir, self.config):
+    if not record.complete(run_dir, record.saved_config(run_dir)):
       log(f"[{self.name}] its record, from its final checkpoint")
       record.write(run_dir, *loop.load_trained(run_dir / layout.FINAL, make_trainer))
 
@@ -341,8 +341,8 @@ class Planner:
     """The source DiscoSyn run, then a frozen-decoder run, its random controls and a
     full-action run on `task_set`. `variant`: the source row's preset suffix; with
     RESIDUAL_SUFFIX the source learned beside a residual, and the frozen run and its
-    controls act with the same cap, ramped in over the first half of their own budget (as
-    the source's was over its)."""
+    controls act with the same cap, ramped in over the first half of their own run (as the
+    source's was over its)."""
     source_set, b, kind = TRANSFER_FROM[task_set]
     base = presets.preset(f"{source_set}-disco{b}-{kind}{variant}")
     if self.decoder_from:
@@ -356,7 +356,7 @@ class Planner:
     if base.residual:
       if not changes["decoder_noise"]:
         return []  # a fitted space (--decoder-from) acts with its mean: no noise for a residual
-      changes["residual_ramp_steps"] = max(1, self.sizes.train_for(task_set)["steps"] // 2)
+      changes["residual_ramp"] = 0.5
     config = self._config(base, task_set, **changes)
     # named by its source row and its own residual: "DiscoSyn3-L-reward frozen",
     # "DiscoSyn3-L-reward-res0.3r150 frozen-res0.3r150"

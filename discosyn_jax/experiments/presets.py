@@ -40,13 +40,19 @@ OBJECTS_SUFFIX, PAPER = "-objects", "-paper"
 REWARD = dict(decoder_init="reward")
 REWARDED = "-reward"
 # a residual beside the synergies (discosyn_jax/agent/residual.py): each head's full-action
-# correction, its weight ramped from 0 to a cap of 0.3 over the first half of the set's
-# `cpu`-scale run (set #1 300 train steps, set #2 1,200, the test bed 300); on the planted
-# test bed with targets partly outside the span it took success from 0.40-0.47 to 0.94-0.96
-# (2 seeds, docs/TRAINING_NOTES.md); `<preset>-residual`, a row to measure, not the default
+# correction, its weight ramped from 0 to a cap of 0.3 over the first half of the run (set #1's
+# `cpu`-scale run: 150 of 300 train steps, set #2's: 600 of 1,200); on the planted test bed
+# with targets partly outside the span it took success from 0.40-0.47 to 0.94-0.96 (2 seeds,
+# docs/TRAINING_NOTES.md); `<preset>-residual`, a row to measure, not the default
 RESIDUAL_CAP = 0.3
-RESIDUAL_RAMP = {"set1": 150, "set2": 600, "planted": 150, "planted_slack": 150}
+RESIDUAL = dict(residual=RESIDUAL_CAP, residual_ramp=0.5)
 RESIDUAL_SUFFIX = "-residual"
+# the late schedule: the residual held at 0 for the first third of the run, then ramped in
+# over a sixth (set #2's `cpu` scale: 400 and 200 of 1,200 train steps, chosen on seeds 0-1
+# of set #2, docs/TRAINING_NOTES.md); `<preset>-residual-late`, the row the confirmation plans
+# of docs/results/confirm-late-residual/ test on new seeds
+RESIDUAL_LATE = dict(residual=RESIDUAL_CAP, residual_start=1 / 3, residual_ramp=1 / 6)
+LATE_SUFFIX = "-residual-late"
 # full-action PPO: no discriminator, no decoder noise, a smaller initial std on 20 dims
 PPO = dict(decoder="identity", n_synergies=20, alpha2=0.0, alpha3=0.0, init_z_std=0.5,
            squash_z=False)
@@ -82,8 +88,8 @@ for _set, _sizes in (("set1", (3, 4)), ("set2", (4, 6))):
     PRESETS[f"{_set}-disco{_b}-linear{REWARDED}"] = _paper.replace(**REWARD)
     PRESETS[f"{_set}-disco{_b}-linear{DECAYED}"] = _paper.replace(**DECAY)
     PRESETS[f"{_set}-disco{_b}-linear"] = _paper.replace(**REWARD)
-    PRESETS[f"{_set}-disco{_b}-linear{RESIDUAL_SUFFIX}"] = _paper.replace(
-        **REWARD, residual=RESIDUAL_CAP, residual_ramp_steps=RESIDUAL_RAMP[_set])
+    PRESETS[f"{_set}-disco{_b}-linear{RESIDUAL_SUFFIX}"] = _paper.replace(**REWARD, **RESIDUAL)
+    PRESETS[f"{_set}-disco{_b}-linear{LATE_SUFFIX}"] = _paper.replace(**REWARD, **RESIDUAL_LATE)
 
 # DiscoSyn3 on the planted test bed: (a) one adequate subspace, (b) many
 for _set in ("planted", "planted_slack"):
@@ -93,7 +99,7 @@ for _set in ("planted", "planted_slack"):
                                                    squash_z=True, **RANDOM, **PLANTED_RUN)
   PRESETS[f"{_set}-disco3-linear{DECAYED}"] = PRESETS[f"{_set}-disco3-linear"].replace(**DECAY)
   PRESETS[f"{_set}-disco3-linear{RESIDUAL_SUFFIX}"] = PRESETS[f"{_set}-disco3-linear"].replace(
-      residual=RESIDUAL_CAP, residual_ramp_steps=RESIDUAL_RAMP[_set])
+      **RESIDUAL)
 
 
 def preset(name: str) -> TrainConfig:

@@ -2,8 +2,8 @@
 so that a folder of records (docs/results/...) continues an experiment (`discosyn experiment
 NAME --out FOLDER` retrains none of the runs it holds) and regenerates its report.
 
-A Train step of discosyn_jax/experiments/paper.py ends by writing, beside config.json, eval.jsonl and
-experiment.json:
+A Train step of discosyn_jax/experiments/paper.py ends by writing, beside config.json, eval.jsonl,
+closing.json (the closing evaluation, written by the loop) and experiment.json:
   decoder.npz       the decoder at the end as a synergy file (fitting.save), runs with a
                     linear or mlp decoder: what a matched control and a frozen transfer
                     read, and the report's learned subspaces
@@ -38,6 +38,8 @@ def files(config: TrainConfig) -> tuple[str, ...]:
   """The files of the record of a finished run of `config`."""
   names = (layout.CONFIG_FILE, layout.EVAL_FILE, layout.EXPERIMENT_FILE,
            layout.METRICS_FILE + logs.ARCHIVED)
+  if config.closing_episodes:  # runs made before the closing evaluation have none (0)
+    names += (layout.CLOSING_FILE,)
   if config.decoder != "identity":
     names += (layout.DECODER_FILE,) + (() if config.freeze_decoder else (layout.Z_FILE,))
   return names
@@ -51,6 +53,10 @@ def write(run_dir: pathlib.Path, trainer, state) -> None:
 
   run_dir, config = pathlib.Path(run_dir), trainer.config
   logs.archive(run_dir / layout.METRICS_FILE)
+  if config.closing_episodes and not (run_dir / layout.CLOSING_FILE).is_file():
+    from discosyn_jax.training import loop  # a run stopped between its end and its closing
+
+    loop.write_closing(trainer, state, run_dir)
   if config.decoder == "identity":
     return
   decoder = jax.device_get(state.params["params"]["synergy_decoder"])
@@ -135,12 +141,16 @@ def complete(run_dir: pathlib.Path, config: TrainConfig) -> bool:
 
 
 def finished(run_dir: pathlib.Path, config: TrainConfig) -> bool:
-  """Whether `run_dir` holds a finished run of exactly `config`: its final checkpoint, or
-  its record alone (a folder of records, checkpoints never kept)."""
+  """Whether `run_dir` holds a finished run of `config` (but for what is done after the run,
+  config.AFTER_THE_RUN): its final checkpoint, or its record alone (a folder of records,
+  checkpoints never kept)."""
   run_dir = pathlib.Path(run_dir)
-  if not (run_dir / layout.CONFIG_FILE).is_file() or saved_config(run_dir) != config:
+  if not (run_dir / layout.CONFIG_FILE).is_file():
     return False
-  return (run_dir / layout.FINAL).is_dir() or complete(run_dir, config)
+  saved = saved_config(run_dir)
+  if not config_lib.same_run(saved, config):
+    return False
+  return (run_dir / layout.FINAL).is_dir() or complete(run_dir, saved)
 
 
 def _record_of(folder: pathlib.Path) -> list[str] | None:

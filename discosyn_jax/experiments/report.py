@@ -37,9 +37,9 @@ from typing import Any
 
 import numpy as np
 
-from discosyn_jax.experiments import intervals, record, report_figures
+from discosyn_jax.experiments import confirm, intervals, record, report_figures
 from discosyn_jax.experiments.presets import REWARDED
-from discosyn_jax.experiments.report_runs import Run, find, metrics, order
+from discosyn_jax.experiments.report_runs import FINAL_K, Run, find, metrics, order
 from discosyn_jax import tasks
 from discosyn_jax.tasks import TASK_SETS
 
@@ -82,9 +82,10 @@ def _cell(values: np.ndarray, threshold: float, paper: str | None) -> str:
 
 
 def _mean_success(run: Run, task_names, over_curve: bool) -> float | None:
-  """A run's success averaged over `task_names`, at its final evaluation or averaged over
-  all its evaluations (the mean over the curve); None where one is missing."""
-  rows = run.evals if over_curve else run.evals[-1:]
+  """A run's success averaged over `task_names`, at its end (the mean of its last k
+  evaluations, Run.final) or averaged over all its evaluations (the mean over the curve);
+  None where one is missing."""
+  rows = run.evals if over_curve else [run.final] if run.evals else []
   values = [row.get(f"{t}/success") for row in rows for t in task_names]
   return float(np.mean(values)) if values and None not in values else None
 
@@ -96,6 +97,14 @@ def _mean_over_tasks(group: list[Run], task_names, over_curve: bool = False) -> 
   return _percent(np.array([v for v in per_seed if v is not None]))
 
 
+def _closing_over_tasks(group: list[Run], task_names) -> str:
+  """Each seed's closing evaluation averaged over the set's tasks, then the mean (min-max)
+  [seeds] over the seeds that have one."""
+  values = np.array([np.mean([r.closing[f"{t}/success"] for t in task_names]) for r in group
+                     if r.closing and all(f"{t}/success" in r.closing for t in task_names)])
+  return f"{_percent(values)} [{values.size}]" if values.size else "–"
+
+
 def solved_tables(runs: list[Run], threshold: float) -> str:
   lines = []
   main = [r for r in runs if r.main]
@@ -103,10 +112,11 @@ def solved_tables(runs: list[Run], threshold: float) -> str:
     in_set = [r for r in main if r.task_set == task_set]
     task_names = list(in_set[0].config.tasks)
     paper = PAPER_SOLVED.get(task_set, {})
+    closing = any(r.closing for r in in_set)  # a column where a run of the set has one
     lines += [f"### {task_set}: tasks solved (success >= {threshold:.0%})", "",
               "| method | " + " | ".join(map(tasks.label, task_names))
-              + " | mean | over the curve | solved |",
-              "|---" * (len(task_names) + 4) + "|"]
+              + " | mean | over the curve |" + (" closing |" if closing else "") + " solved |",
+              "|---" * (len(task_names) + 4 + closing) + "|"]
     for method in order({r.method for r in in_set}):
       group = [r for r in in_set if r.method == method]
       cells, solved = [], 0
@@ -121,8 +131,9 @@ def solved_tables(runs: list[Run], threshold: float) -> str:
                      if marks and set(paper_tasks) == set(task_names) else "")
       unfinished = sum(not r.finished for r in group)
       note = f", {unfinished} unfinished" if unfinished else ""
+      closing_cell = f" | {_closing_over_tasks(group, task_names)}" if closing else ""
       lines.append(f"| {method} | " + " | ".join(cells) + f" | {_mean_over_tasks(group, task_names)}"
-                   f" | {_mean_over_tasks(group, task_names, over_curve=True)}"
+                   f" | {_mean_over_tasks(group, task_names, over_curve=True)}{closing_cell}"
                    f" | {solved}/{len(task_names)}{paper_count}{note} |")
     lines.append("")
   return "\n".join(lines)
@@ -459,11 +470,13 @@ def improvement_of(runs: list[Run], task_set: str, x: str, y: str,
 
 # -- figures ----------------------------------------------------------------------
 def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = True,
-          force: bool = False, make_trainer=None) -> pathlib.Path:
-  """Write OUT/REPORT.md and its figures; return the REPORT.md path."""
+          force: bool = False, make_trainer=None, final_k: int = FINAL_K) -> pathlib.Path:
+  """Write OUT/REPORT.md and its figures; return the REPORT.md path. A run's final success
+  is the mean of its last `final_k` evaluations."""
   if not 0 < threshold <= 1:
     raise ValueError(f"the success threshold must be in (0, 1], not {threshold}")
-  runs, fits = find(paths)
+  plans = confirm.plans_in(paths)  # read first: a damaged plan is refused before any work
+  runs, fits = find(paths, final_k=final_k)
   if not runs and not fits:
     raise ValueError("no runs among the folders given")
   out = pathlib.Path(out)
@@ -472,7 +485,7 @@ def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = Tr
     raise ValueError(f"{out} already holds a report; pass --force to replace it")
   made = not out.exists()
   try:
-    return _write(runs, fits, paths, out, threshold, with_tsne, make_trainer)
+    return _write(runs, fits, paths, out, threshold, with_tsne, make_trainer, final_k, plans)
   except BaseException:
     if made:  # a report that fails leaves no folder of half its figures
       shutil.rmtree(out, ignore_errors=True)
@@ -480,7 +493,7 @@ def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = Tr
 
 
 def _write(runs, fits, paths, out: pathlib.Path, threshold: float, with_tsne: bool,
-           make_trainer) -> pathlib.Path:
+           make_trainer, final_k: int, plans) -> pathlib.Path:
   report = out / "REPORT.md"
   old_figures = set(_figures(report.read_text())) if report.exists() else set()
   out.mkdir(parents=True, exist_ok=True)
@@ -490,8 +503,12 @@ def _write(runs, fits, paths, out: pathlib.Path, threshold: float, with_tsne: bo
   lines = ["# DiscoSyn-JAX report", "",
            f"{len(runs)} runs and {len(fits)} synergy fits from: "
            + ", ".join(f"`{p}`" for p in sources) + " (relative to this report's folder).",
-           f"A task is *solved* when the mean over seeds of the final deterministic evaluation's "
-           f"success is at least {threshold:.0%}. Cells: mark, mean success, (min–max "
+           f"A run's *final* success on a task is the mean of its last {final_k} deterministic "
+           f"evaluation{'s' if final_k > 1 else ''}; a task is *solved* when the mean over "
+           f"seeds of the final success is at least {threshold:.0%}. *closing*, where runs "
+           "have one: the closing evaluation that ends a run (more episodes a task, "
+           "closing.json), averaged over the set's tasks, mean (min–max) [seeds]. Cells: mark, "
+           "mean success, (min–max "
            "over seeds), [seeds], and the paper's mark (Tables I and II; the paper's "
            f"DiscoSyn<b>-L marks also beside today's default start, DiscoSyn<b>-L{REWARDED}). "
            "*mean*: each seed's success averaged over the set's tasks at the end, *over the "
@@ -501,6 +518,8 @@ def _write(runs, fits, paths, out: pathlib.Path, threshold: float, with_tsne: bo
   if scales:
     lines += [f"Scales: {', '.join(scales)}.", ""]
 
+  for plan, folder in plans:
+    lines += confirm.report_lines(plan, [r for r in runs if r.path.resolve().parent == folder])
   main = [r for r in runs if r.main]
   if main:
     lines += ["## Tasks solved", "", solved_tables(runs, threshold)]

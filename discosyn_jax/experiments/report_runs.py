@@ -1,5 +1,11 @@
 """The runs and fits `discosyn report` reads (report.py): each run folder with its method,
-task set and seed (from its experiment.json, else from its config) and its evaluations."""
+task set and seed (from its experiment.json, else from its config), its evaluations and its
+closing evaluation.
+
+A run's *final* success is the mean of its last `final_k` evaluations (FINAL_K by default):
+one evaluation of a few dozen episodes swings a task by tenths, the mean of three less so.
+Its *closing* evaluation (closing.json, `closing_episodes` a task on episodes of their own)
+is the end measured once more, where the run has one."""
 
 from __future__ import annotations
 
@@ -8,6 +14,8 @@ import functools
 import json
 import pathlib
 from typing import Any
+
+import numpy as np
 
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import hands
@@ -30,7 +38,8 @@ for _b in (3, 4, 6):
         f"Random{_b}-L-matched{_start}",)
   METHOD_ORDER += tuple(f"{m}{_b}-{k}{c}" for k in ("L", "NL") for m, c in (
       ("DiscoSyn", ""), ("Random", ""), ("Random", "-zfree")) if (k, m) != ("L", "DiscoSyn"))
-MAIN_EXPERIMENTS = ("discosyn", "baselines")
+MAIN_EXPERIMENTS = ("discosyn", "baselines", "confirm")
+FINAL_K = 3  # evaluations whose mean is a run's final success
 
 
 @dataclasses.dataclass
@@ -44,6 +53,8 @@ class Run:
   evals: list[dict[str, Any]]
   finished: bool
   scale: str | None  # None for a run `discosyn experiment` did not make
+  closing: dict[str, Any] | None = None  # its closing.json; None for a run without one
+  final_k: int = FINAL_K
 
   @property
   def main(self) -> bool:
@@ -52,7 +63,9 @@ class Run:
 
   @property
   def final(self) -> dict[str, Any]:
-    return self.evals[-1] if self.evals else {}
+    """Each task's figures averaged over the last `final_k` evaluations (every key the
+    newest holds; those of fewer rows where the run has fewer)."""
+    return final_of(self.evals, self.final_k)
 
   def per_task_env_steps(self, row) -> int:
     return row["step"] * self.config.num_envs * self.config.unroll_length
@@ -60,6 +73,19 @@ class Run:
   @property
   def action_size(self) -> int:
     return action_size(self.config.tasks[0], self.config.hand)
+
+
+def final_of(evals: list[dict[str, Any]], k: int) -> dict[str, Any]:
+  """The newest row of `evals` with each task's figures ("<task>/success", ...) averaged
+  over the last `k` rows that hold them (its step, env steps and wall clock its own)."""
+  rows = evals[-k:]
+  if not rows:
+    return {}
+  out = dict(rows[-1])
+  for key in (key for key in rows[-1] if "/" in key):
+    values = [row[key] for row in rows if key in row]
+    out[key] = float(np.mean(values))
+  return out
 
 
 @functools.cache
@@ -80,7 +106,8 @@ def metrics(run: Run) -> list[dict[str, Any]]:
   return logs.read_log(run.path / layout.METRICS_FILE, as_archived=True)
 
 
-def _method_of(config: TrainConfig) -> str:
+def method_of(config: TrainConfig) -> str:
+  """The method a config runs, as the report names it where experiment.json is silent."""
   from discosyn_jax.synergies import fitting
 
   if config.decoder == "identity":
@@ -111,33 +138,38 @@ def load_run(path: pathlib.Path) -> Run:
   meta_file = path / layout.EXPERIMENT_FILE
   meta = json.loads(meta_file.read_text()) if meta_file.is_file() else {}
   evals = logs.read_log(path / layout.EVAL_FILE)
+  closing_file = path / layout.CLOSING_FILE
+  closing = json.loads(closing_file.read_text()) if closing_file.is_file() else None
   # logs kept without checkpoints (docs/results) are finished when the last step was evaluated
   finished = (path / layout.FINAL).is_dir() or bool(evals and evals[-1]["step"] >= config.steps)
-  # derived from the config only where experiment.json is silent (_method_of may read a file)
+  # derived from the config only where experiment.json is silent (method_of may read a file)
   task_set = meta["set"] if "set" in meta else set_of(config)
   if config.hand != hands.DEFAULT:  # another hand's runs are never pooled with ours
     task_set = f"{task_set} on {hands.label(config.hand)}"
   return Run(path=path, config=config, experiment=meta.get("experiment", "train"),
-             method=meta["method"] if "method" in meta else _method_of(config),
+             method=meta["method"] if "method" in meta else method_of(config),
              task_set=task_set,
              seed=meta.get("seed", config.seed), evals=evals, finished=finished,
-             scale=meta.get("scale"))
+             scale=meta.get("scale"), closing=closing)
 
 
-def find(paths, inside: bool = False) -> tuple[list[Run], list[dict[str, Any]]]:
-  """The runs and the synergy fits in `paths` (run folders, fit folders, or folders of them).
-  A folder named here must hold one; one found inside (a report, say) may hold none."""
+def find(paths, inside: bool = False, final_k: int = FINAL_K) -> tuple[list[Run], list[dict[str, Any]]]:
+  """The runs and the synergy fits in `paths` (run folders, fit folders, or folders of them),
+  each run's final success the mean of its last `final_k` evaluations. A folder named here
+  must hold one; one found inside (a report, say) may hold none."""
+  if final_k < 1:
+    raise ValueError(f"the final success is the mean of at least 1 evaluation, not {final_k}")
   runs, fits = [], []
   for path in map(pathlib.Path, paths):
     if not path.is_dir():
       raise ValueError(f"{path} is not a folder")
     if (path / layout.CONFIG_FILE).is_file():
-      runs.append(load_run(path))
+      runs.append(dataclasses.replace(load_run(path), final_k=final_k))
     elif (path / record.FIT_FILE).is_file():
       fits.append(json.loads((path / record.FIT_FILE).read_text()))
     else:
       inner = sorted(p for p in path.iterdir() if p.is_dir())
-      found = find(inner, inside=True) if inner else ([], [])
+      found = find(inner, inside=True, final_k=final_k) if inner else ([], [])
       if not found[0] and not found[1] and not inside:
         raise ValueError(f"{path} holds no run (config.json) and no synergy fit")
       runs += found[0]

@@ -310,12 +310,15 @@ def method_name(meta) -> str:
 
 def residual_suffix(meta) -> str:
   """A residual's part of a method's name: '-res' and its cap, 'r' its ramp and 's' its
-  start in train steps where set ('-res0.3r75'); '' without a residual (agent/residual.py)."""
+  start in the run's train steps where set ('-res0.3r75'), as the run's records have named
+  them since the schedule was counted in steps; '' without a residual (agent/residual.py)."""
   get = meta.get if isinstance(meta, dict) else lambda k, d=None: getattr(meta, k, d)
   cap = get("residual", 0.0) or 0.0
   if not cap:
     return ""
-  ramp, start = get("residual_ramp_steps", 0), get("residual_start_steps", 0)
+  steps = get("steps", 0) or 0
+  ramp, start = round((get("residual_ramp", 0.0) or 0.0) * steps), round(
+      (get("residual_start", 0.0) or 0.0) * steps)
   return f"-res{cap:g}" + (f"r{ramp}" if ramp else "") + (f"s{start}" if start else "")
 
 

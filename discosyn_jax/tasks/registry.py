@@ -164,7 +164,8 @@ def _load_failed(where: str, path: pathlib.Path, err: Exception) -> str:
 
 def entry(name: str) -> Entry:
   if name not in REGISTRY and ":" in name:  # a task of one's own, named in a run's config
-    load(name)
+    loaded = load(name)  # a file named relative to the working folder: known by both names
+    REGISTRY.setdefault(name, REGISTRY[loaded])
   if name not in REGISTRY:
     raise ValueError(f"unknown task {name!r}; known tasks: {', '.join(REGISTRY)}")
   return REGISTRY[name]

@@ -38,25 +38,33 @@ def episodes(trainer, params, normalizers, key, task: int, episodes: int, keep_s
   return traj, ret, success
 
 
-def returns(trainer, params, normalizers, key, at_step=None):
-  """{task: {"return", "success"}} of the deterministic policy, averaged over `eval_envs`
-  episodes per task (`at_step`: as for `episodes`)."""
+def returns(trainer, params, normalizers, key, at_step=None, count: int | None = None):
+  """{task: {"return", "success"}} of the deterministic policy, averaged over `count`
+  (default `eval_envs`) episodes per task (`at_step`: as for `episodes`)."""
   out = {}
   for n, name in enumerate(trainer.config.tasks):
     key, sub = jax.random.split(key)
-    _, ret, success = episodes(trainer, params, normalizers, sub, n, trainer.config.eval_envs,
-                               at_step=at_step)
+    _, ret, success = episodes(trainer, params, normalizers, sub, n,
+                               count or trainer.config.eval_envs, at_step=at_step)
     out[name] = {"return": ret.mean(), "success": success.mean()}
   return out
 
 
-def evaluate(trainer, state) -> dict[str, dict[str, float]]:
+def evaluate(trainer, state, closing: bool = False) -> dict[str, dict[str, float]]:
   """The evaluation of a state; its key depends on the step only, never on training's rng. A
-  residual acts with the weight of the state's step: the policy as it trained."""
+  residual acts with the weight of the state's step: the policy as it trained. `closing`:
+  the closing evaluation that ends a run, `closing_episodes` per task on episodes of their
+  own (another key than the curve's evaluation at the same step)."""
   key = jax.random.fold_in(jax.random.PRNGKey(trainer.config.seed + 1), int(state.step))
+  if closing:
+    key = jax.random.fold_in(key, CLOSING_KEY)
   at_step = state.step if trainer.model.residual else None
-  out = trainer.evaluate(state.params, state.normalizers, key, at_step=at_step)
+  count = trainer.config.closing_episodes if closing else None
+  out = trainer.evaluate(state.params, state.normalizers, key, at_step=at_step, count=count)
   return jax.tree.map(float, jax.device_get(out))
+
+
+CLOSING_KEY = 1  # folded into the closing evaluation's key: its episodes are not the curve's
 
 
 def rollouts(trainer, params, normalizers, key, episodes: int):
@@ -68,10 +76,12 @@ def rollouts(trainer, params, normalizers, key, episodes: int):
           for n, name in enumerate(trainer.config.tasks)}
 
 
-def format_table(results: dict[str, dict[str, float]], step: int, config) -> str:
-  """The evaluation table that ends a run and that `discosyn eval` prints."""
-  lines = [f"evaluation at step {step} ({step * config.env_steps_per_train_step:,} env steps, "
-           f"{config.eval_envs} deterministic episodes per task)",
+def format_table(results: dict[str, dict[str, float]], step: int, config, episodes: int | None = None,
+                 what: str = "") -> str:
+  """The evaluation table that ends a run (`what`: "closing " for its closing evaluation) and
+  that `discosyn eval` prints."""
+  lines = [f"{what}evaluation at step {step} ({step * config.env_steps_per_train_step:,} env steps, "
+           f"{episodes or config.eval_envs} deterministic episodes per task)",
            f"{'task':16s} {'success':>8s} {'return':>9s}"]
   for name, r in results.items():
     lines.append(f"{name:16s} {r['success']:8.1%} {r['return']:9.2f}")

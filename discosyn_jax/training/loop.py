@@ -3,7 +3,8 @@
 Everything numerical happens inside the jitted `Trainer.train_step`; between steps this
 loop writes one JSON line of metrics (and TensorBoard scalars, logs.py), evaluates the deterministic policy every
 `eval_every` steps, checkpoints every `checkpoint_every` steps and at the end, where it
-also draws the training curves (plots.py).
+also runs the closing evaluation (`closing_episodes` a task, closing.json) and draws the
+training curves (plots.py).
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from typing import Any, Callable
 
 import jax
 
-from discosyn_jax import checks
+from discosyn_jax import atomic, checks
 from discosyn_jax import config as config_lib
 from discosyn_jax.agent import networks
 from discosyn_jax.config import TrainConfig
@@ -245,13 +246,32 @@ def _train(trainer: Trainer, run_dir: pathlib.Path, resume: bool, writer: owner.
         results = evaluation.evaluate(trainer, state)
         _log_eval((eval_file, board, on_eval), results, step, config, time.perf_counter() - start)
     save(final=True)
+    closing = write_closing(trainer, state, run_dir)
     curves = plots.run_curves(run_dir, run_dir / layout.PLOTS_DIR)
   finally:
     if bar is not None:
       bar.close()
   log(f"training curves: {', '.join(str(p) for p in curves)}")
   log(evaluation.format_table(results, step, config))
-  return {"results": results, "state": state, "compile_s": compile_s, "trainer": trainer}
+  if closing is not None:
+    log(evaluation.format_table(closing, step, config, config.closing_episodes, "closing "))
+  return {"results": results, "closing": closing, "state": state, "compile_s": compile_s,
+          "trainer": trainer}
+
+
+def write_closing(trainer: Trainer, state: TrainState, run_dir: pathlib.Path):
+  """The closing evaluation of a run's final state, written to closing.json (a run continued
+  past its end writes it anew); None where the config asks for none."""
+  config = trainer.config
+  if not config.closing_episodes:
+    return None
+  results = evaluation.evaluate(trainer, state, closing=True)
+  step = int(state.step)
+  row = {"step": step, "env_steps": step * config.env_steps_per_train_step,
+         "episodes": config.closing_episodes}
+  row.update({f"{n}/{k}": v for n, r in results.items() for k, v in r.items()})
+  atomic.write_text(run_dir / layout.CLOSING_FILE, json.dumps(row, indent=1) + "\n")
+  return results
 
 
 def _start(trainer: Trainer, run_dir: pathlib.Path, resume: bool, log):

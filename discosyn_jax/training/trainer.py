@@ -84,7 +84,8 @@ class Trainer:
                           if self.model.has_discriminator else None)
     self.train_step = jax.jit(self._train_step, donate_argnums=0)
     # the deterministic policy's evaluation, and its episodes of one task (evaluation.py)
-    self.evaluate = jax.jit(functools.partial(evaluation.returns, self))
+    self.evaluate = jax.jit(functools.partial(evaluation.returns, self),
+                            static_argnames=("count",))
     self.episodes = jax.jit(functools.partial(evaluation.episodes, self),
                             static_argnames=("task", "episodes", "keep_states"))
 

@@ -42,7 +42,7 @@ def config(method: str, seed: int) -> ds.TrainConfig:
       tasks=tuple(f"{FILE}:{name}" for name in TASKS), seed=seed,
       **{**paper.SCALES["cpu"].train, "steps": STEPS, "eval_every": 5})
   if method.endswith("residual"):
-    base = base.replace(residual_ramp_steps=STEPS // 2)
+    base = base.replace(residual_ramp=0.5)
   if method.startswith("zfree"):
     base = base.replace(freeze_decoder=True, squash_z=False, decoder_init="random")
   return base.validate()

@@ -1,0 +1,330 @@
+"""A confirmatory experiment: a plan written (and committed) before its runs, run exactly as
+written, and judged by the rule it states. `discosyn experiment confirm PLAN --out DIR`
+runs it; `discosyn report DIR` prints each hypothesis with its interval and its verdict.
+
+A plan is a JSON file:
+
+  {"name": "late-residual",            the experiment's name (experiment.json says
+                                       confirm-<name>)
+   "claim": "...",                     what is being confirmed, and where it was chosen
+   "final_k": 3,                       a run's final success: the mean of its last k evaluations
+   "level_margin": 0.1,                "level": P's interval inside 0.5 +- this margin
+   "rows": [{"name": "set2-late",      a row: its runs are folders <name>-seed<n> in DIR
+             "seeds": [3, 4, 5, 6, 7],
+             "config": {...}},         every TrainConfig field but the seed (config.json's)
+            ...],
+   "hypotheses": [{"x": "set2-late", "y": "set2-ppo", "score": "final", "expect": "above"},
+                  ...],
+   "decision": "..."}                  what follows if every hypothesis holds, and if not
+
+Scores: "final" (the mean of the last k evaluations), "curve" (the mean over the evaluation
+curve) or "closing" (the closing evaluation, closing.json), a run x task matrix each, over the
+tasks the two rows share. The rule, the same for every plan: P = P(x > y), the probability
+that a run of x scores above a run of y on a task (ties half, averaged over tasks), with its
+95 % stratified bootstrap interval (intervals.py). The verdict is *above* where the interval
+lies above 0.5, *below* where it lies below, *level* where it lies inside 0.5 +- level_margin,
+else *not separated*. An expectation holds: "above" / "below" / "level" on that verdict;
+"not below" on any verdict but below; "not above" on any but above. The plan holds where
+every hypothesis holds, and only once every run of its rows has finished.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import pathlib
+from typing import Any
+
+import numpy as np
+
+from discosyn_jax import atomic, config as config_lib
+from discosyn_jax.config import TrainConfig
+from discosyn_jax.experiments import intervals
+
+PLAN_FILE = "plan.json"  # the plan, copied into the folder of its runs
+SCORES = ("final", "curve", "closing")
+EXPECTATIONS = {"above": {"above"}, "below": {"below"}, "level": {"level"},
+                "not below": {"above", "level", "not separated"},
+                "not above": {"below", "level", "not separated"}}
+
+
+@dataclasses.dataclass(frozen=True)
+class Row:
+  name: str
+  seeds: tuple[int, ...]
+  config: TrainConfig  # its seed that of the first seed; run(seed) gives each
+
+  def run_config(self, seed: int) -> TrainConfig:
+    return self.config.replace(seed=seed).validate()
+
+  def folder(self, seed: int) -> str:
+    return f"{self.name}-seed{seed}"
+
+
+@dataclasses.dataclass(frozen=True)
+class Hypothesis:
+  x: str
+  y: str
+  score: str
+  expect: str
+
+  @property
+  def text(self) -> str:
+    return f"{self.x} {self.expect} {self.y} ({self.score})"
+
+
+@dataclasses.dataclass(frozen=True)
+class Plan:
+  name: str
+  claim: str
+  final_k: int
+  level_margin: float
+  rows: tuple[Row, ...]
+  hypotheses: tuple[Hypothesis, ...]
+  decision: str
+  source: dict[str, Any]  # the file's JSON, as written
+
+  def row(self, name: str) -> Row:
+    return next(row for row in self.rows if row.name == name)
+
+
+def load(path) -> Plan:
+  """The checked plan in the file at `path`; ValueError naming the file and what is wrong."""
+  path = pathlib.Path(path)
+  try:
+    values = json.loads(path.read_text())
+  except FileNotFoundError:
+    raise ValueError(f"no plan file {path}") from None
+  except (json.JSONDecodeError, UnicodeDecodeError) as err:
+    raise ValueError(f"plan {path}: not JSON ({err})") from None
+  try:
+    return parse(values)
+  except (KeyError, TypeError, ValueError) as err:
+    what = f"no {err}" if isinstance(err, KeyError) else str(err)
+    raise ValueError(f"plan {path}: {what}") from None
+
+
+def parse(values: dict[str, Any]) -> Plan:
+  if not isinstance(values, dict):
+    raise ValueError("not a JSON object")
+  known = {"name", "claim", "final_k", "level_margin", "rows", "hypotheses", "decision"}
+  unknown = sorted(set(values) - known)
+  if unknown:
+    raise ValueError(f"unknown field(s) {', '.join(unknown)}")
+  rows = tuple(_row(r) for r in values["rows"])
+  names = [r.name for r in rows]
+  if not rows or len(set(names)) != len(names):
+    raise ValueError("rows must be given, each name once")
+  hypotheses = tuple(Hypothesis(**h) for h in values["hypotheses"])
+  for h in hypotheses:
+    for name in (h.x, h.y):
+      if name not in names:
+        raise ValueError(f"hypothesis {h.text}: no row {name!r}")
+    if h.score not in SCORES:
+      raise ValueError(f"hypothesis {h.text}: score is one of {', '.join(SCORES)}")
+    if h.expect not in EXPECTATIONS:
+      raise ValueError(f"hypothesis {h.text}: expect is one of {', '.join(EXPECTATIONS)}")
+    shared = set(_row_by(rows, h.x).config.tasks) & set(_row_by(rows, h.y).config.tasks)
+    if not shared:
+      raise ValueError(f"hypothesis {h.text}: the two rows share no task")
+  final_k, margin = values["final_k"], values["level_margin"]
+  if not isinstance(final_k, int) or final_k < 1:
+    raise ValueError(f"final_k must be a whole number >= 1, not {final_k!r}")
+  if not isinstance(margin, (int, float)) or not 0 <= margin < 0.5:
+    raise ValueError(f"level_margin must be in [0, 0.5), not {margin!r}")
+  return Plan(str(values["name"]), str(values["claim"]), final_k, float(margin), rows,
+              hypotheses, str(values["decision"]), values)
+
+
+def _row_by(rows, name: str) -> Row:
+  return next(r for r in rows if r.name == name)
+
+
+def _row(values: dict[str, Any]) -> Row:
+  name, seeds, fields = values["name"], values["seeds"], values["config"]
+  if not isinstance(name, str) or not name or "/" in name:
+    raise ValueError(f"a row's name is a folder's name, not {name!r}")
+  if not seeds or not all(isinstance(s, int) for s in seeds) or len(set(seeds)) != len(seeds):
+    raise ValueError(f"row {name}: seeds must be distinct whole numbers")
+  if "seed" in fields:
+    raise ValueError(f"row {name}: its config gives no seed (the row's seeds do)")
+  try:
+    config = TrainConfig.from_dict({**fields, "seed": seeds[0]}).validate()
+  except (TypeError, ValueError) as err:
+    raise ValueError(f"row {name}: {err}") from None
+  return Row(name, tuple(seeds), config)
+
+
+def row_fields(config: TrainConfig) -> dict[str, Any]:
+  """A row's config as a plan writes it: every field but the seed."""
+  return {k: v for k, v in config.to_dict().items() if k != "seed"}
+
+
+# -- running it ----------------------------------------------------------------------
+def steps(plan: Plan, out: pathlib.Path) -> list:
+  """The plan's runs as steps of paper.py (trained, resumed or kept as any step), in the
+  order of its seeds then rows: the first seeds of every row come first."""
+  from discosyn_jax.experiments import paper, report_runs
+
+  out = pathlib.Path(out)
+  runs = []
+  for index in range(max(len(row.seeds) for row in plan.rows)):
+    for row in plan.rows:
+      if index < len(row.seeds):
+        seed = row.seeds[index]
+        config = row.run_config(seed)
+        meta = dict(experiment=f"confirm-{plan.name}", method=report_runs.method_of(config),
+                    set=report_runs.set_of(config), seed=seed, scale=f"plan {plan.name}",
+                    row=row.name)
+        runs.append(paper.Train(row.folder(seed), config, meta))
+  return runs
+
+
+def check_folder(plan: Plan, out: pathlib.Path) -> None:
+  """Refuse a folder that holds another plan, or a run whose config is not the plan's."""
+  out = pathlib.Path(out)
+  held = out / PLAN_FILE
+  if held.is_file():
+    try:
+      same = json.loads(held.read_text()) == plan.source
+    except json.JSONDecodeError:
+      same = False
+    if not same:
+      raise ValueError(f"{out} holds the runs of another plan ({held} differs from this one)")
+  for row in plan.rows:
+    for seed in row.seeds:
+      config_file = out / row.folder(seed) / "config.json"
+      if config_file.is_file():
+        saved = config_lib.load(config_file)
+        wanted = row.run_config(seed)
+        if not config_lib.same_run(saved, wanted):
+          field = next(k for k, v in saved.to_dict().items() if getattr(wanted, k) != v)
+          raise ValueError(f"{config_file.parent} is not the plan's run: its {field} is "
+                           f"{getattr(saved, field)!r}, the plan's {getattr(wanted, field)!r}")
+
+
+def run(plan_path, out, *, progress: bool = False, log=print) -> list[pathlib.Path]:
+  """Run (or continue) every run of the plan in `out`; the plan is copied there first. A run
+  that another process is writing is passed by, so that the same command started twice
+  trains two runs side by side."""
+  from discosyn_jax import tasks
+  from discosyn_jax.run import owner
+
+  plan = load(plan_path)
+  out = pathlib.Path(out)
+  check_folder(plan, out)
+  out.mkdir(parents=True, exist_ok=True)
+  atomic.write_text(out / PLAN_FILE, json.dumps(plan.source, indent=1) + "\n")
+  folders = []
+  for step in steps(plan, out):
+    folders.append(out / step.name)
+    if step.done(out):
+      log(f"[{step.name}] done already; kept")
+      step.settle(out, tasks.trainer, log)
+      continue
+    if owner.writer_of(out / step.name):
+      log(f"[{step.name}] being trained by another process; passed by")
+      continue
+    log(f"[{step.name}] train")
+    try:
+      step.run(out, tasks.trainer, progress, log)
+    except owner.Busy:  # taken by another process since the look above
+      log(f"[{step.name}] being trained by another process; passed by")
+  return folders
+
+
+# -- judging it ----------------------------------------------------------------------------
+@dataclasses.dataclass(frozen=True)
+class Verdict:
+  hypothesis: Hypothesis
+  p: intervals.Estimate | None  # None until both rows have finished runs
+  runs: tuple[int, int]  # finished runs of x and of y
+  verdict: str
+  holds: bool | None  # None until every planned run has finished
+
+
+def judge(p: intervals.Estimate, margin: float) -> str:
+  """The verdict of the rule (module docstring) on P(x > y) and its interval."""
+  found = intervals.verdict(p)
+  if found == "not separated" and 0.5 - margin <= p.low and p.high <= 0.5 + margin:
+    return "level"
+  return found
+
+
+def scores(runs, tasks_, score: str, final_k: int) -> np.ndarray | None:
+  """A runs x tasks matrix of one score of finished runs (None for none)."""
+  from discosyn_jax.experiments.report_runs import final_of
+
+  rows = []
+  for run in runs:
+    if score == "closing":
+      row = run.closing or {}
+    elif score == "final":
+      row = final_of(run.evals, final_k)
+    else:
+      row = {f"{t}/success": float(np.mean([e[f"{t}/success"] for e in run.evals]))
+             for t in tasks_ if all(f"{t}/success" in e for e in run.evals)}
+    if all(f"{t}/success" in row for t in tasks_):
+      rows.append([row[f"{t}/success"] for t in tasks_])
+  return np.array(rows) if rows else None
+
+
+def verdicts(plan: Plan, runs) -> list[Verdict]:
+  """Each hypothesis of `plan` judged on `runs` (report_runs.Run, those of its folder)."""
+  def of(row: Row):
+    names = {row.folder(seed) for seed in row.seeds}
+    return [r for r in runs if r.path.name in names and r.finished and r.evals]
+
+  everything = all(len(of(row)) == len(row.seeds) for row in plan.rows)
+  out = []
+  for h in plan.hypotheses:
+    x_row, y_row = plan.row(h.x), plan.row(h.y)
+    shared = [t for t in x_row.config.tasks if t in y_row.config.tasks]
+    x = scores(of(x_row), shared, h.score, plan.final_k)
+    y = scores(of(y_row), shared, h.score, plan.final_k)
+    counts = (0 if x is None else len(x), 0 if y is None else len(y))
+    if x is None or y is None:
+      out.append(Verdict(h, None, counts, "no runs yet", None))
+      continue
+    p = intervals.probability_of_improvement({h.score: x}, {h.score: y})[h.score]
+    found = judge(p, plan.level_margin)
+    holds = found in EXPECTATIONS[h.expect] if everything else None
+    out.append(Verdict(h, p, counts, found, holds))
+  return out
+
+
+def report_lines(plan: Plan, runs) -> list[str]:
+  """The report's section of a plan: each hypothesis with P, its interval, its verdict and
+  whether it holds; then the plan's own decision rule and where it stands."""
+  found = verdicts(plan, runs)
+  planned = sum(len(row.seeds) for row in plan.rows)
+  finished = sum(1 for row in plan.rows for seed in row.seeds
+                 if any(r.path.name == row.folder(seed) and r.finished for r in runs))
+  lines = [f"## Confirmation: {plan.name}", "", plan.claim, "",
+           f"{finished} of {planned} planned runs finished. Final success: the mean of the last "
+           f"{plan.final_k} evaluations. P = P(x > y) with its 95 % stratified bootstrap "
+           f"interval; *above* / *below*: the interval clears 0.5; *level*: it lies inside "
+           f"0.5 ± {plan.level_margin:g}; else *not separated*.", "",
+           "| hypothesis | runs (x, y) | P(x > y) | verdict | expected | holds |",
+           "|---|---|---|---|---|---|"]
+  for v in found:
+    p = "–" if v.p is None else f"{v.p.value:.2f} [{v.p.low:.2f}, {v.p.high:.2f}]"
+    holds = "pending" if v.holds is None else "yes" if v.holds else "no"
+    lines.append(f"| {v.hypothesis.x} vs {v.hypothesis.y} ({v.hypothesis.score}) | "
+                 f"{v.runs[0]}, {v.runs[1]} | {p} | {v.verdict} | {v.hypothesis.expect} | {holds} |")
+  if finished < planned:
+    outcome = "The plan is pending: not every planned run has finished."
+  else:
+    outcome = "The plan holds." if all(v.holds for v in found) else "The plan does not hold."
+  lines += ["", f"{outcome} Decision rule: {plan.decision}", ""]
+  return lines
+
+
+def plans_in(paths) -> list[tuple[Plan, pathlib.Path]]:
+  """The plans of the folders given to the report (a folder with plan.json, or inside one)."""
+  found = []
+  for path in (pathlib.Path(p).resolve() for p in paths):
+    for folder in (path, path.parent):
+      if (folder / PLAN_FILE).is_file() and all(f != folder for _, f in found):
+        found.append((load(folder / PLAN_FILE), folder))
+  return found
