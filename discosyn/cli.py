@@ -88,7 +88,11 @@ def build_parser() -> argparse.ArgumentParser:
   p.add_argument("--out", help="folder for postures.png and matrix.png (default: RUN/synergies)")
   p.add_argument("--k", type=float, default=1.0, help="the hand is shown at z = -k, 0, +k "
                  "(in units of z, whose prior is a unit normal; default: %(default)s)")
-  p.add_argument("--force", action="store_true", help="replace pictures already there")
+  p.add_argument("--export", metavar="FILE", help="write the run's synergies as a synergy file "
+                 "(.npz) that says what it is: its hand and actuators, what it was learned on and "
+                 "how well (docs/TAKE_HOME.md); no pictures (default: none, the pictures)")
+  p.add_argument("--force", action="store_true", help="replace pictures (or the --export file) "
+                 "already there")
   p.set_defaults(fn=commands.cmd_synergies)
 
   p = sub.add_parser("render", help="a video (MP4 or GIF) of a run's deterministic policy on a "
@@ -134,7 +138,8 @@ def build_parser() -> argparse.ArgumentParser:
                  "(discosyn_jax/experiments/confirm.py)")
   p.add_argument("plan", nargs="?", help="confirm: the plan file (JSON: rows with their full "
                  "configs and seeds, hypotheses, the decision); its runs are folders "
-                 "<row>-seed<n> in --out, and `discosyn report` prints its verdicts")
+                 "<row>-seed<n> in --out, and `discosyn report` prints its verdicts (default: none; "
+                 "the other experiments take none)")
   p.add_argument("--scale", default="cpu", help="ci (seconds per run) | cpu (minutes per run on "
                  "2 cores) | gpu (one accelerator); default: %(default)s")
   p.add_argument("--seeds", type=int, nargs="+",

@@ -211,6 +211,14 @@ def cmd_synergies(args) -> None:
   from discosyn_jax.training import loop
   from discosyn_jax.viz import synergy_pictures
 
+  if args.export:
+    from discosyn_jax.synergies import artefact
+
+    path = pathlib.Path(args.export)
+    if path.exists() and not args.force:
+      raise UsageError(f"{path} exists; pass --force to replace it")
+    print(artefact.export(args.run, path))
+    return
   run_dir = reading.find_run_dir(args.run)
   trainer, state = loop.load_trained(args.run, tasks.trainer, backend="native")  # host physics: pictures only
   _check_scenes(trainer, args.run, "picture")

@@ -8,11 +8,16 @@
     ds.read_run("runs/mine").success          # each task's success at the last evaluation
     env = ds.make_env("valve3")               # a Brax Env: reset / step, actions in [-1, 1]
     ds.load_task("my_task.py:Slider")         # a task of one's own (docs/YOUR_TASK.md)
+    ds.shipped_synergies()                    # the synergy files that ship, by name
+    syn = ds.Synergies.load("shadow20-set1")  # .decode(z), .matrix, .actuators, .learned_on
+    ds.synergy_env(env, syn)                  # env's action: the b synergies (any JAX RL library)
 
 The config: TrainConfig (its defaults are the recommended setup: a linear decoder of 3
 synergies started in the reward prior, z bounded, on task set #1), preset, PRESETS.
 Tasks: Task, TaskConfig, TASK_SETS, task_names, make_env, register_task, load_task.
-Runs: train, evaluate, read_run, Run. setup_jax: MJX imported quietly, the compile cache on.
+Runs: train, evaluate, read_run, Run. Synergies: Synergies, shipped_synergies, synergy_env
+(docs/TAKE_HOME.md). setup_jax: MJX imported quietly, the compile cache on, and what Brax's
+own trainers still call of JAX given back where JAX removed it.
 Every name loads on first use, so that `import discosyn_jax` itself imports no JAX.
 """
 
@@ -36,7 +41,8 @@ __version__ = "0.1.0"
 
 
 def setup_jax() -> None:
-  """MJX imported quietly and the persistent compile cache on (run/jax_setup.py)."""
+  """MJX imported quietly, the persistent compile cache on, and `jax.device_put_replicated`
+  given back where JAX removed it, for Brax's own trainers (run/jax_setup.py)."""
   from discosyn_jax.run import jax_setup
 
   jax_setup.setup_jax()
@@ -59,6 +65,10 @@ _API = {
     "evaluate": ("discosyn_jax.api", "evaluate"),
     "read_run": ("discosyn_jax.api", "read_run"),
     "Run": ("discosyn_jax.api", "Run"),
+    "Synergies": ("discosyn_jax.synergies.artefact", "Synergies"),
+    # not ds.synergies: that is the subpackage discosyn_jax.synergies once it is imported
+    "shipped_synergies": ("discosyn_jax.synergies.artefact", "shipped"),
+    "synergy_env": ("discosyn_jax.synergies.action_space", "synergy_env"),
 }
 __all__ = [*_API, "setup_jax"]
 

@@ -61,18 +61,12 @@ def test_brax_training_wrappers_run_it():
   assert "reward/turn" in state.metrics
 
 
-def _device_put_replicated(tree, devices):
-  """A stand-in for `jax.device_put_replicated`, removed in JAX 0.10 and still called by
-  Brax 0.14.2's `ppo.train`: a leading axis of one copy per device, which its pmap splits."""
-  return jax.tree.map(lambda x: jnp.stack([x] * len(devices)), tree)
-
-
-def test_brax_own_ppo_trains_and_evaluates_on_a_task(monkeypatch):
+def test_brax_own_ppo_trains_and_evaluates_on_a_task():
   """Brax's trainer wraps the env in its own wrappers (EvalWrapper adds a "reward" metric):
-  their keys must survive the env's step."""
+  their keys must survive the env's step. (What Brax calls of JAX that JAX removed is given
+  back by setup_jax, which the registry runs: tests/test_take_home.py runs it from a script.)"""
   from brax.training.agents.ppo import train as brax_ppo
 
-  monkeypatch.setattr(jax, "device_put_replicated", _device_put_replicated, raising=False)
   evaluations = []
   _, params, metrics = brax_ppo.train(
       helpers.env("valve1"), num_timesteps=40, episode_length=10, num_envs=4,
@@ -99,13 +93,15 @@ def test_a_wheel_carries_the_xml_and_works_outside_the_checkout(tmp_path):
     names = set(zf.namelist())
     assert {"discosyn_jax/xml/hands/shadow20.xml", "discosyn_jax/xml/hands/leap16.xml",
             "discosyn_jax/xml/objects/valve0.xml", "discosyn_jax/tasks/valve.py",
-            "discosyn_jax/experiments/presets.py"} <= names
+            "discosyn_jax/experiments/presets.py",
+            "discosyn_jax/synergies/shipped/shadow20-set1.npz"} <= names
     # two top-level names, both the project's own: none a user's tasks.py could shadow
     assert {n.split("/")[0] for n in names if not n.split("/")[0].endswith(".dist-info")} == {
         "discosyn", "discosyn_jax"}
     zf.extractall(tmp_path / "site")
   code = ("from discosyn_jax import tasks; import discosyn_jax.env.assets as a; env = tasks.make('valve3', backend='native');"
-          "print('RESULT', tasks.__file__, a.xml_dir(), env.observation_size)")
+          "import discosyn_jax as ds; s = ds.Synergies.load('leap16-set1');"
+          "print('RESULT', tasks.__file__, a.xml_dir(), env.observation_size, s.b, s.hand, s.source)")
   out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True,
                        env={"PYTHONPATH": str(tmp_path / "site"), "PATH": "/usr/bin:/bin",
                             "HOME": os.environ["HOME"], "DISCOSYN_JAX_CACHE": "off"})
@@ -115,3 +111,6 @@ def test_a_wheel_carries_the_xml_and_works_outside_the_checkout(tmp_path):
   assert lines[0].startswith(str(tmp_path / "site"))
   assert lines[1] == str(tmp_path / "site" / "discosyn_jax" / "xml")
   assert lines[2] == "27"
+  # a shipped synergy file, by name, from the installed package
+  assert lines[3:5] == ["3", "leap16"]
+  assert lines[5] == str(tmp_path / "site" / "discosyn_jax" / "synergies" / "shipped" / "leap16-set1.npz")

@@ -250,8 +250,8 @@ def test_report_lists_every_method_and_task(experiments, tmp_path):
   table = text.split("### set1")[1].split("###")[0].split("##")[0]
   for method in ("PPO", "PCA4", "AE4", "PCA6", "AE6", "DiscoSyn3-L"):
     row = next(line for line in table.splitlines() if line.startswith(f"| {method} |"))
-    assert row.count("[1]") == 2  # a cell per task, one seed behind each
-  assert "| a | b | mean | over the curve | solved |" in table
+    assert row.count("[1]") == 3  # a cell per task, one seed behind each, and the closing
+  assert "| a | b | mean | over the curve | closing | solved |" in table
   assert "| set1 | PCA |" in text and "| set1 | AE |" in text
   sparse = text.split("## The sparse goal valve")[1]
   assert "| DiscoSyn3-L frozen | g | " in sparse and "| PPO | g | " in sparse
@@ -300,7 +300,7 @@ def test_report_mean_and_spread_over_seeds(tmp_path, method):
                                                      set="set1", seed=seed, scale="cpu"), evals)
   (tmp_path / "report").mkdir()  # a report written beside the runs is passed over
   (tmp_path / "report" / "REPORT.md").write_text("an earlier report")
-  runs, _ = report_runs.find([tmp_path])
+  runs, _ = report_runs.find([tmp_path], final_k=1)  # the final: the last evaluation alone
   assert len(runs) == 2
   table = report.solved_tables(runs, threshold=0.7)
   # the paper's marks beside the paper's start and today's default start alike
@@ -329,7 +329,7 @@ def test_transfer_is_judged_over_the_curve_and_by_the_steps_to_the_threshold(tmp
     write_logs(tmp_path / f"seed{seed}", config.replace(seed=seed),
                dict(experiment="transfer", method="DiscoSyn3-L frozen", set="unseen-set1",
                     seed=seed), [(10 * (i + 1), {"valve_cw": v}) for i, v in enumerate(success)])
-  runs, _ = report_runs.find([tmp_path])
+  runs, _ = report_runs.find([tmp_path], final_k=1)  # the final: the last evaluation alone
   assert report.steps_to(runs[0], "valve_cw", 0.8) == 20 * 8 * 5  # env steps of the task
   table = report.frozen_table(runs, 0.8, first_rewards=False)
   # final 1.0 / 0.85 / 0.3; over the curve 0.7 / 0.65 / 0.13; 80 % at 800 and 1,200 env

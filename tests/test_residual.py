@@ -45,13 +45,14 @@ def assert_same_tree(a, b):
 # -- off: today's computation ------------------------------------------------------------
 def test_no_residual_adds_nothing_and_trains_as_a_config_that_never_named_it(tmp_path):
   old = {k: v for k, v in toy_trainer().config.to_dict().items()
-         if k not in ("residual", "residual_ramp_steps", "residual_start_steps", "init_residual_std")}
+         if k not in ("residual", "residual_ramp", "residual_start", "init_residual_std",
+                      "closing_episodes")}
   (tmp_path / "config.json").write_text(json.dumps(old))
-  assert config_lib.upgrade(tmp_path / "config.json") == ["residual", "residual_ramp_steps",
-                                                           "residual_start_steps",
-                                                           "init_residual_std"]
+  assert config_lib.upgrade(tmp_path / "config.json") == ["residual", "residual_ramp",
+                                                           "residual_start",
+                                                           "init_residual_std", "closing_episodes"]
   upgraded = config_lib.load(tmp_path / "config.json")
-  assert (upgraded.residual, upgraded.residual_ramp_steps, upgraded.residual_start_steps) == (0, 0, 0)
+  assert (upgraded.residual, upgraded.residual_ramp, upgraded.residual_start) == (0, 0, 0)
   plain = toy_trainer()
   assert not plain.model.residual and plain.rho(0) is None
   assert not any(name.startswith("residuals") for name in plain.initial_params()["params"])
@@ -69,7 +70,7 @@ def test_a_residual_held_at_zero_leaves_the_rollout_and_its_own_parameters_alone
   """Held at 0 the residual's draws come from a stream of their own: the first rollout is a
   plain run's, and its parameters get no gradient (they do not drift before the ramp)."""
   _, plain = run(toy_trainer(), 1)
-  held = toy_trainer(residual=0.3, residual_start_steps=2)
+  held = toy_trainer(residual=0.3, residual_start=0.02)  # 2 of its 100 train steps
   start = jax.device_get(held.init().params["params"]["residuals_0"])
   state, logs = run(held, 2)
   for key in ("a/reward", "a/return", "b/reward", "a/log_q"):
@@ -80,22 +81,22 @@ def test_a_residual_held_at_zero_leaves_the_rollout_and_its_own_parameters_alone
 
 # -- the schedule ------------------------------------------------------------------------
 def test_rho_rises_linearly_over_its_ramp_after_its_start_and_stays_at_its_cap():
-  ramp = TrainConfig(residual=0.3, residual_ramp_steps=200)
+  ramp = TrainConfig(residual=0.3, residual_ramp=0.5, steps=400)  # 200 train steps
   values = lambda config, steps: [float(residual.rho(config, s)) for s in steps]
   np.testing.assert_allclose(values(ramp, [0, 50, 100, 200, 201, 10_000]),
                              [0, 0.075, 0.15, 0.3, 0.3, 0.3], rtol=1e-6)
-  late = ramp.replace(residual_start_steps=100)
+  late = ramp.replace(residual_start=0.25)  # 100 train steps
   np.testing.assert_allclose(values(late, [0, 99, 100, 200, 300, 400]),
                              [0, 0, 0, 0.15, 0.3, 0.3], rtol=1e-6)
   np.testing.assert_allclose(values(TrainConfig(residual=0.2), [0, 1, 500]), [0.2] * 3, rtol=1e-6)
-  np.testing.assert_allclose(values(TrainConfig(residual=0.2, residual_start_steps=3), [0, 2, 3]),
+  np.testing.assert_allclose(values(TrainConfig(residual=0.2, residual_start=0.03), [0, 2, 3]),
                              [0, 0, 0.2], rtol=1e-6)
   # jitted on the state's int32 step, as the train step computes it
   assert float(jax.jit(lambda s: residual.rho(ramp, s))(jnp.int32(50))) == pytest.approx(0.075)
 
 
 def test_the_logged_rho_follows_the_schedule_and_the_action_shares_are_logged():
-  trainer = toy_trainer(residual=0.4, residual_ramp_steps=2, residual_start_steps=1)
+  trainer = toy_trainer(residual=0.4, residual_ramp=0.02, residual_start=0.01)
   _, logs = run(trainer, 4)
   np.testing.assert_allclose([m["residual/rho"] for m in logs], [0, 0, 0.2, 0.4], rtol=1e-6)
   for task in ("a", "b"):
@@ -136,7 +137,7 @@ def test_a_ramped_residual_reaches_a_target_the_frozen_synergies_stop_short_of(c
                        freeze_decoder=True, policy_hidden=(32, 32), value_hidden=(32, 32),
                        discriminator_hidden=(32, 32), num_envs=32, unroll_length=10,
                        num_minibatches=4, update_epochs=4, learning_rate=3e-3, eval_envs=256,
-                       residual=cap, residual_ramp_steps=50 if cap else 0)
+                       steps=150, residual=cap, residual_ramp=1 / 3 if cap else 0)
   trainer = Trainer(config, envs=[tasks.make("planted0", outside=1.0)])
   state = trainer.init(decoder_params=planted_span_decoder())
   start = jax.device_get(state.params["params"])
@@ -180,9 +181,10 @@ def test_a_planted_target_outside_the_span_has_the_share_it_is_given():
 @pytest.mark.parametrize("changes, message", [
     (dict(residual=-0.1), "residual .* must be between 0 and 1, not -0.1"),
     (dict(residual=1.5), "must be between 0 and 1, not 1.5"),
-    (dict(residual_ramp_steps=100), "schedule a residual: set residual"),
-    (dict(residual=0.3, residual_ramp_steps=-1), "residual_ramp_steps must not be negative"),
-    (dict(residual=0.3, residual_start_steps=-5), "residual_start_steps must not be negative"),
+    (dict(residual_ramp=0.5), "schedule a residual: set residual"),
+    (dict(residual=0.3, residual_ramp=-0.1), "residual_ramp must not be negative"),
+    (dict(residual=0.3, residual_start=-0.5), "residual_start must not be negative"),
+    (dict(residual=0.3, residual_start=0.6, residual_ramp=0.5), "their sum must be at most 1"),
     (dict(residual=0.3, init_residual_std=0.0), "init_residual_std must be positive"),
     (dict(residual=0.3, decoder="identity", n_synergies=20, alpha2=0.0, alpha3=0.0),
      "identity decoder .* has no room for a residual"),
@@ -191,14 +193,15 @@ def test_a_planted_target_outside_the_span_has_the_share_it_is_given():
 def test_the_config_refuses_an_impossible_residual(changes, message):
   with pytest.raises(ValueError, match=message):
     TrainConfig(**changes).validate()
-  TrainConfig(residual=0.3, residual_ramp_steps=200, freeze_decoder=True).validate()
+  TrainConfig(residual=0.3, residual_ramp=0.5, freeze_decoder=True).validate()
 
 
 def test_the_residual_is_two_flags_away():
   args = cli.build_parser().parse_args(["train", "--preset", "planted-disco3-linear",
-                                        "--residual", "0.3", "--residual-ramp-steps", "200"])
+                                        "--residual", "0.3", "--residual-ramp", "0.5"])
   config = commands.train_config(args)
-  assert (config.residual, config.residual_ramp_steps, config.residual_start_steps) == (0.3, 200, 0)
+  assert (config.residual, config.residual_ramp, config.residual_start) == (0.3, 0.5, 0)
+  assert config.residual_ramp_step_count == 200  # half of the preset's 400 train steps
 
 
 @pytest.mark.parametrize("argv, line", [
@@ -206,11 +209,11 @@ def test_the_residual_is_two_flags_away():
      "between 0 and 1, not -0.5"),
     (["--preset", "set1-ppo", "--residual", "0.3"], "discosyn: error: the identity decoder "
      "(full-action PPO) has no room for a residual"),
-    (["--residual-ramp-steps", "10"], "discosyn: error: residual_ramp_steps and "
-     "residual_start_steps schedule a residual"),
+    (["--residual-ramp", "0.1"], "discosyn: error: residual_ramp and "
+     "residual_start schedule a residual"),
     (["--residual", "lots"], "discosyn train: error: argument --residual: invalid float value"),
-    (["--residual-ramp-steps", "1.5"], "discosyn train: error: argument --residual-ramp-steps: "
-     "invalid int value"),
+    (["--residual-ramp", "half"], "discosyn train: error: argument --residual-ramp: "
+     "invalid float value"),
 ])
 def test_a_bad_residual_flag_is_one_line_exit_2_and_nothing_made(argv, line, tmp_path, capsys):
   out = tmp_path / "run"
@@ -244,7 +247,7 @@ def test_transfer_and_sparse_freeze_the_residual_rows_decoder_and_act_with_its_r
     assert frozen.config.decoder_from == str(tmp_path.resolve() / source / "decoder.npz")
     assert frozen.config.freeze_decoder and frozen.name.split("-")[:3] == [experiment, "synergies", "residual"]
     # the source's cap, ramped in over the first half of this run's own budget
-    assert (frozen.config.residual, frozen.config.residual_ramp_steps) == (presets.RESIDUAL_CAP, half)
+    assert (frozen.config.residual, frozen.config.residual_ramp_step_count) == (presets.RESIDUAL_CAP, half)
     b = frozen.config.n_synergies
     for control in (f"Random{b}-L-res0.3r{half}", f"Random{b}-L-zfree-res0.3r{half}"):
       assert by_method[experiment, task_set, control].config.residual == presets.RESIDUAL_CAP
@@ -253,7 +256,7 @@ def test_transfer_and_sparse_freeze_the_residual_rows_decoder_and_act_with_its_r
     assert paper_row.config.residual == 0.0
     assert by_method[experiment, task_set, "PPO"].config.residual == 0.0
     # a run without its experiment.json is named from its config the same way
-    assert report_runs._method_of(frozen.config) == f"DiscoSyn{b}-L frozen-res0.3r{half}"
+    assert report_runs.method_of(frozen.config) == f"DiscoSyn{b}-L frozen-res0.3r{half}"
   names = [s.name for s in planner.plan("transfer")]
   assert len(names) == len(set(names))
   assert sum(n.startswith("transfer-ppo-set1") for n in names) == 1

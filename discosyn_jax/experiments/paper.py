@@ -105,7 +105,8 @@ class Scale:
 SCALES = {
     # seconds per run: the pipeline's plumbing, nothing learned
     "ci": Scale(dict(num_envs=4, unroll_length=5, num_minibatches=2, update_epochs=1, steps=2,
-                     eval_every=1, eval_envs=2, checkpoint_every=0), 2, 50, (0,)),
+                     eval_every=1, eval_envs=2, closing_episodes=4, checkpoint_every=0), 2, 50,
+                (0,)),
     # a 2-core CPU: 1.5 M env steps for a four-task run of set #1, 4-6 min with two runs side
     # by side; Table I at this scale (17 runs and a fit a seed) takes 1.5 h a seed, two seeds
     # side by side (2026-12-03), the sparse valve and transfer ~30 min a seed more.

@@ -6,7 +6,8 @@ the layout of DiscoSyn's own decoder (linear: `synergies.kernel` (k, 20) and
 `synergies.bias`; mlp: networks.GaussianHead's), plus a JSON `meta` entry with the config
 fields the decoder needs (decoder, n_synergies, decoder_hidden) and its explained variance.
 A run directory works as a source too: its latest checkpoint's decoder, or where its
-checkpoints are not kept (a run's record, discosyn_jax/experiments/record.py) its decoder.npz.
+checkpoints are not kept (a run's record, discosyn_jax/experiments/record.py) its decoder.npz;
+and so does the NAME of a synergy file that ships with the package (SHIPPED, artefact.py).
 
 Both fitted decoders take z on a unit scale: PCA's components are scaled by the standard
 deviation along them, the autoencoder's latent code is standardised and the scaling is
@@ -188,6 +189,20 @@ def _check_k(k: int, actions: np.ndarray):
 
 
 # -- synergy files -------------------------------------------------------------
+SHIPPED = pathlib.Path(__file__).resolve().parent / "shipped"  # NAME.npz, NAME.png
+
+
+def shipped_name(source) -> bool:
+  """Whether `source` names a shipped synergy file rather than a path."""
+  return (isinstance(source, str) and "/" not in source and not pathlib.Path(source).exists()
+          and (SHIPPED / f"{source}.npz").is_file())
+
+
+def resolve(source: str | pathlib.Path) -> pathlib.Path:
+  """The path of a synergy file or run folder, or of the shipped file named `source`."""
+  return SHIPPED / f"{source}.npz" if shipped_name(source) else pathlib.Path(source)
+
+
 def save(path: pathlib.Path, params: dict, fields: dict[str, Any], **meta) -> pathlib.Path:
   """Write a synergy file (atomically: a crash leaves no half-written file)."""
   path = pathlib.Path(path)
@@ -203,8 +218,9 @@ def save(path: pathlib.Path, params: dict, fields: dict[str, Any], **meta) -> pa
 
 
 def read(path: str | pathlib.Path) -> tuple[dict[str, Any], dict]:
-  """(meta with the decoder's config fields, decoder params) of a synergy file or a run."""
-  path = pathlib.Path(path)
+  """(meta with the decoder's config fields, decoder params) of a synergy file, a run, or a
+  shipped synergy file's name."""
+  path = resolve(path)
   if path.is_dir():
     from discosyn_jax.run import checkpoints, layout, reading
 
@@ -224,7 +240,9 @@ def read(path: str | pathlib.Path) -> tuple[dict[str, Any], dict]:
       raise ValueError(f"{path} is not a synergy file ({type(err).__name__}: {err})") from None
     _check_file(path, meta, flat)
   else:
-    raise ValueError(f"decoder source {path} does not exist")
+    names = ", ".join(sorted(p.stem for p in SHIPPED.glob("*.npz")))
+    raise ValueError(f"decoder source {path} does not exist, and no shipped synergies have that "
+                     f"name (shipped: {names})")
   meta = {**_DEFAULTS, **meta}
   meta["decoder_hidden"] = tuple(meta["decoder_hidden"])
   params: dict = {}
@@ -268,8 +286,16 @@ def _check_file(path, meta, flat: dict) -> None:
 
 def load_decoder(path, config) -> dict:
   """The decoder params of `path` for a run of `config`; ValueError in one line when the
-  decoder is not the one the config describes."""
+  decoder is not the one the config describes, or drives another hand."""
   meta, params = read(path)
+  hand = meta.get("hand")  # a synergy file of format 2 names the actuators it drives
+  if hand:
+    from discosyn_jax.env import hands
+
+    if tuple(hand["actuators"]) != tuple(hands.actuators(config.hand)):
+      raise ValueError(f"{path} drives the {hand['name']} hand ({len(hand['actuators'])} "
+                       f"actuators), not {hands.label(config.hand)} "
+                       f"({len(hands.actuators(config.hand))} actuators)")
   for name in ARCHITECTURE:
     if name == "decoder_hidden" and meta["decoder"] != "mlp":
       continue
@@ -327,7 +353,8 @@ def frozen_fields(meta: dict[str, Any], path) -> dict[str, Any]:
   `read` gives it): the decoder's architecture, frozen, no discriminator bonus and no
   decoder entropy (constants here). Fitted PCA / autoencoder spaces act with their mean
   (no noise outside the space); a DiscoSyn decoder keeps the noise it learned."""
-  return dict(architecture(meta), decoder_from=str(pathlib.Path(path).resolve()),
+  source = str(path) if shipped_name(path) else str(pathlib.Path(path).resolve())
+  return dict(architecture(meta), decoder_from=source,
               freeze_decoder=True, decoder_noise="method" not in meta, alpha2=0.0, alpha3=0.0,
               decoder_weight_decay=0.0, decoder_weight_decay_steps=0, decoder_init="random")
 

@@ -33,12 +33,26 @@ def hand_model(hand: str = hands.DEFAULT) -> mujoco.MjModel:
   return scene.load_spec("hand", hand).compile()
 
 
+def _z_grid(b: int, k: float) -> np.ndarray:
+  """(3 b, b): z = -k e_i, 0, +k e_i for each synergy i."""
+  return np.einsum("c,ij->icj", np.array([-k, 0.0, k]), np.eye(b)).reshape(3 * b, b).astype(np.float32)
+
+
 def decoded_actions(trainer, params, k: float) -> np.ndarray:
   """(b, 3, actions) decoder means at z = -k e_i, 0, +k e_i, clipped to the action box."""
   b = trainer.model.n_synergies
-  z = np.einsum("c,ij->icj", np.array([-k, 0.0, k]), np.eye(b)).reshape(3 * b, b)
-  mean, _ = trainer.model.apply(params, z.astype(np.float32), method=DiscoSyn.decode)
+  mean, _ = trainer.model.apply(params, _z_grid(b, k), method=DiscoSyn.decode)
   return np.clip(np.asarray(mean), -1.0, 1.0).reshape(b, 3, -1)
+
+
+def file_postures(synergies, path: pathlib.Path, k: float = 1.0, height: int = 240,
+                  width: int = 320) -> pathlib.Path:
+  """postures.png of a synergy file (artefact.Synergies): its hand along each synergy."""
+  actions = np.clip(synergies.decode(_z_grid(synergies.b, k)), -1.0, 1.0).reshape(synergies.b, 3, -1)
+  images = posture_images(actions, height, width, synergies.hand or hands.DEFAULT)
+  plot_postures(images, k, pathlib.Path(path),
+                f"{synergies.name}: hand at z = -k, 0, +k")
+  return pathlib.Path(path)
 
 
 def settle(model: mujoco.MjModel, action: np.ndarray, max_steps: int = 2000,

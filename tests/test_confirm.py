@@ -1,0 +1,253 @@
+"""A final that one evaluation cannot swing (the mean of the last k evaluations, the closing
+evaluation), confirmation plans (experiments/confirm.py) and the residual's schedule as a
+share of the run."""
+
+import json
+
+import numpy as np
+import pytest
+
+from discosyn import cli
+from discosyn_jax import config as config_lib
+from discosyn_jax.config import TrainConfig
+from discosyn_jax.experiments import confirm, paper, presets, report, report_runs
+from discosyn_jax.run import layout
+from discosyn_jax.synergies import fitting
+from discosyn_jax.training import loop
+from discosyn_jax.training.trainer import Trainer
+from tests.toy_env import ReachAction
+
+TOY = TrainConfig(tasks=("a", "b"), n_synergies=2, policy_hidden=(16, 16), value_hidden=(16, 16),
+                  discriminator_hidden=(16, 16), num_envs=8, unroll_length=4, num_minibatches=2,
+                  update_epochs=1, eval_envs=4, eval_every=1, steps=3, checkpoint_every=0,
+                  closing_episodes=16, decoder_init="random")
+
+
+def toy_trainer(config):
+  return Trainer(config, envs=[ReachAction(0.5), ReachAction(-0.5, obs_size=5)])
+
+
+def fake_run(folder, config, successes, closing=None, meta=None):
+  """A run folder as a record holds it: config.json, eval.jsonl with these successes (one
+  row per evaluation: {task: success}), closing.json where given, experiment.json."""
+  folder.mkdir(parents=True)
+  config_lib.save(config, folder / layout.CONFIG_FILE)
+  rows = [{"step": (i + 1) * config.steps // len(successes), "env_steps": 0,
+           **{f"{t}/success": s for t, s in row.items()}} for i, row in enumerate(successes)]
+  (folder / layout.EVAL_FILE).write_text("".join(json.dumps(r) + "\n" for r in rows))
+  if closing is not None:
+    (folder / layout.CLOSING_FILE).write_text(json.dumps(
+        {"step": config.steps, **{f"{t}/success": s for t, s in closing.items()}}))
+  if meta is not None:
+    (folder / layout.EXPERIMENT_FILE).write_text(json.dumps(meta))
+  return folder
+
+
+# -- the final: the mean of the last k evaluations; the closing evaluation -------------------
+def test_the_final_is_the_mean_of_the_last_k_evaluations(tmp_path):
+  evals = [{"step": s, "a/success": v, "a/return": 10 * v} for s, v in ((1, 0.0), (2, 0.5), (3, 0.25), (4, 1.0))]
+  assert report_runs.final_of(evals, 1) == evals[-1]
+  three = report_runs.final_of(evals, 3)
+  assert three["a/success"] == pytest.approx((0.5 + 0.25 + 1.0) / 3)
+  assert three["a/return"] == pytest.approx(10 * (0.5 + 0.25 + 1.0) / 3)
+  assert three["step"] == 4  # the newest row's own step
+  assert report_runs.final_of(evals[:2], 3)["a/success"] == 0.25  # a run with fewer: all it has
+  assert report_runs.final_of([], 3) == {}
+  # through the report: the solved table's cell and the run's final, k from the flag
+  config = TOY.replace(steps=4).validate()
+  fake_run(tmp_path / "runs" / "r", config, [{"a": v, "b": 1.0} for v in (0.0, 0.5, 0.25, 1.0)])
+  (run,), _ = report_runs.find([tmp_path / "runs"], final_k=3)
+  assert run.final["a/success"] == pytest.approx(1.75 / 3)
+  for k, cell in ((1, "✓ 100%"), (3, "✗ 58%")):
+    text = report.write([tmp_path / "runs"], tmp_path / f"report{k}", with_tsne=False,
+                        final_k=k).read_text()
+    assert f"| {cell} [1] | ✓ 100% [1] |" in text, text
+    assert f"mean of its last {k} deterministic" in text
+  with pytest.raises(ValueError, match="at least 1 evaluation"):
+    report_runs.find([tmp_path / "runs"], final_k=0)
+
+
+def test_every_run_ends_with_a_closing_evaluation_kept_in_its_record(tmp_path):
+  done = loop.train(TOY, tmp_path / "run", make_trainer=toy_trainer, progress=False,
+                    log=lambda *_: None)
+  closing = json.loads((tmp_path / "run" / layout.CLOSING_FILE).read_text())
+  assert closing["step"] == 3 and closing["episodes"] == 16
+  assert set(closing) >= {"a/success", "a/return", "b/success", "b/return"}
+  assert closing["a/return"] == pytest.approx(done["closing"]["a"]["return"])
+  # its own episodes: not the last evaluation of the curve, whose 4 episodes are a subset
+  last = json.loads((tmp_path / "run" / layout.EVAL_FILE).read_text().splitlines()[-1])
+  assert closing["a/return"] != last["a/return"]
+  from discosyn_jax.experiments import record
+
+  assert layout.CLOSING_FILE in record.files(TOY)
+  assert layout.CLOSING_FILE not in record.files(TOY.replace(closing_episodes=0))
+  (run,), _ = report_runs.find([tmp_path / "run"])
+  assert run.closing["b/success"] == closing["b/success"]
+  none = loop.train(TOY.replace(closing_episodes=0), tmp_path / "none", make_trainer=toy_trainer,
+                    progress=False, log=lambda *_: None)
+  assert none["closing"] is None and not (tmp_path / "none" / layout.CLOSING_FILE).exists()
+
+
+def test_a_finished_run_without_a_closing_evaluation_is_still_the_planned_run(tmp_path):
+  """Records made before the closing evaluation (closing_episodes 0) are finished runs of
+  today's config: an experiment keeps them rather than training them again."""
+  config = TOY.replace(closing_episodes=0)
+  fake_run(tmp_path / "old", config, [{"a": 1.0, "b": 1.0}] * 3)
+  for name in ("metrics.jsonl.xz", "decoder.npz", "z.npz", "experiment.json"):
+    (tmp_path / "old" / name).write_text("")
+  from discosyn_jax.experiments import record
+
+  assert record.finished(tmp_path / "old", TOY)
+  assert not record.finished(tmp_path / "old", TOY.replace(alpha1=0.5))
+  assert config_lib.same_run(TOY, config) and not config_lib.same_run(TOY, TOY.replace(seed=1))
+
+
+# -- plans --------------------------------------------------------------------------------
+def tiny_plan(**changes):
+  base = presets.preset("planted-disco3-linear").replace(
+      **{**paper.SCALES["ci"].train, "steps": 2, "closing_episodes": 4})
+  late = base.replace(residual=0.3, residual_start=0.5, residual_ramp=0.5)
+  plan = {"name": "tiny", "claim": "the late schedule is not below the default", "final_k": 3,
+          "level_margin": 0.1,
+          "rows": [{"name": "late", "seeds": [0], "config": confirm.row_fields(late)},
+                   {"name": "default", "seeds": [0], "config": confirm.row_fields(base)}],
+          "hypotheses": [{"x": "late", "y": "default", "score": "final", "expect": "not below"}],
+          "decision": "nothing follows."}
+  plan.update(changes)
+  return plan
+
+
+def test_a_plan_runs_exactly_its_rows_and_refuses_a_run_that_differs(tmp_path, capsys):
+  (tmp_path / "plan.json").write_text(json.dumps(tiny_plan()))
+  folders = confirm.run(tmp_path / "plan.json", tmp_path / "out", log=lambda *_: None)
+  assert [f.name for f in folders] == ["late-seed0", "default-seed0"]
+  late = config_lib.load(tmp_path / "out" / "late-seed0" / "config.json")
+  assert (late.seed, late.residual_start_step, late.residual_ramp_step_count) == (0, 1, 1)
+  meta = json.loads((tmp_path / "out" / "late-seed0" / "experiment.json").read_text())
+  assert meta["experiment"] == "confirm-tiny" and meta["row"] == "late"
+  assert meta["method"] == "DiscoSyn3-L-res0.3r1s1"
+  assert (tmp_path / "out" / "late-seed0" / layout.CLOSING_FILE).is_file()
+  text = report.write([tmp_path / "out"], tmp_path / "report", with_tsne=False).read_text()
+  assert "## Confirmation: tiny" in text and "| late vs default (final) | 1, 1 |" in text
+  # a run in the folder whose config is not the plan's: one line, exit 2, nothing touched
+  changed = tiny_plan()
+  changed["rows"][0]["config"]["alpha1"] = 0.5
+  (tmp_path / "changed.json").write_text(json.dumps(changed))
+  (tmp_path / "out" / confirm.PLAN_FILE).write_text(json.dumps(changed))  # the same plan text
+  before = sorted(p.name for p in (tmp_path / "out").iterdir())
+  assert cli.main(["experiment", "confirm", str(tmp_path / "changed.json"), "--out",
+                   str(tmp_path / "out")]) == 2
+  (line,) = [l for l in capsys.readouterr().err.splitlines() if l]
+  assert line.endswith("late-seed0 is not the plan's run: its alpha1 is 0.001, the plan's 0.5")
+  assert sorted(p.name for p in (tmp_path / "out").iterdir()) == before
+  # a folder of another plan
+  (tmp_path / "out" / confirm.PLAN_FILE).write_text(json.dumps(tiny_plan()))
+  assert cli.main(["experiment", "confirm", str(tmp_path / "changed.json"), "--out",
+                   str(tmp_path / "out")]) == 2
+  assert "holds the runs of another plan" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("change, message", [
+    (dict(final_k=0), "final_k must be a whole number >= 1"),
+    (dict(level_margin=0.7), "level_margin must be in"),
+    (dict(hypotheses=[{"x": "late", "y": "nobody", "score": "final", "expect": "above"}]),
+     "no row 'nobody'"),
+    (dict(hypotheses=[{"x": "late", "y": "default", "score": "best", "expect": "above"}]),
+     "score is one of final, curve, closing"),
+    (dict(hypotheses=[{"x": "late", "y": "default", "score": "final", "expect": "better"}]),
+     "expect is one of"),
+    (dict(extra=1), "unknown field"),
+    (dict(decision="missing"), "no 'decision'"),
+])
+def test_a_bad_plan_is_refused_in_one_line_naming_the_file(change, message, tmp_path):
+  plan = tiny_plan(**change)
+  if plan["decision"] == "missing":
+    del plan["decision"]
+  (tmp_path / "plan.json").write_text(json.dumps(plan))
+  with pytest.raises(ValueError, match=message) as err:
+    confirm.load(tmp_path / "plan.json")
+  assert str(err.value).startswith(f"plan {tmp_path / 'plan.json'}: ")
+  seeded = tiny_plan()
+  seeded["rows"][0]["config"]["seed"] = 3
+  (tmp_path / "seeded.json").write_text(json.dumps(seeded))
+  with pytest.raises(ValueError, match="row late: its config gives no seed"):
+    confirm.load(tmp_path / "seeded.json")
+
+
+def planted_runs(tmp_path, x_scores, y_scores):
+  """report_runs.Run objects of rows x and y, seed by seed: each a list of {task: success}
+  per evaluation."""
+  runs = []
+  for row, per_seed in (("late", x_scores), ("default", y_scores)):
+    for seed, evals in enumerate(per_seed):
+      rows = [{"step": i + 1, **{f"{t}/success": v for t, v in e.items()}} for i, e in enumerate(evals)]
+      runs.append(report_runs.Run(path=tmp_path / f"{row}-seed{seed}", config=TrainConfig(),
+                                  experiment="confirm-tiny", method=row, task_set="s", seed=seed,
+                                  evals=rows, finished=True, scale=None,
+                                  closing={f"{t}/success": v for t, v in evals[-1].items()}))
+  return runs
+
+
+@pytest.mark.parametrize("x, y, verdict, holds", [
+    (0.9, 0.1, "above", {"above": True, "not below": True, "level": False, "below": False}),
+    (0.1, 0.9, "below", {"above": False, "not below": False, "not above": True}),
+    (0.5, 0.5, "level", {"level": True, "not below": True, "above": False}),
+])
+def test_a_verdict_on_planted_numbers_has_the_known_answer(x, y, verdict, holds, tmp_path):
+  tasks_ = [f"valve{i}" for i in range(4)]
+  seeds = range(5)
+  make = lambda v: [[{t: v for t in tasks_}] * 3 for _ in seeds]
+  plan = confirm.parse(tiny_plan(rows=[
+      {"name": name, "seeds": list(seeds), "config": confirm.row_fields(TrainConfig(tasks=tuple(tasks_)))}
+      for name in ("late", "default")]))
+  runs = planted_runs(tmp_path, make(x), make(y))
+  for score in confirm.SCORES:
+    for expect, expected in holds.items():
+      plan_h = confirm.Plan(**{**plan.__dict__, "hypotheses": (
+          confirm.Hypothesis("late", "default", score, expect),)})
+      (found,) = confirm.verdicts(plan_h, runs)
+      assert found.verdict == verdict and found.holds is expected, (score, expect)
+      assert found.runs == (5, 5)
+      assert found.p.value == pytest.approx({"above": 1.0, "below": 0.0, "level": 0.5}[verdict])
+  # a row one seed short: the verdict is shown, whether it holds is pending
+  (found,) = confirm.verdicts(plan, runs[:-1])
+  assert found.holds is None and found.runs == (5, 4)
+
+
+def test_interleaved_rows_are_not_separated():
+  """Two rows whose seeds interleave (0.2, 0.4, ... against 0.3, 0.5, ...) on one task:
+  P = 11 / 25 with an interval that spans 0.5 widely: neither above nor level."""
+  from discosyn_jax.experiments import intervals
+
+  x = np.array([[0.2], [0.4], [0.6], [0.8], [1.0]])
+  y = np.array([[0.3], [0.5], [0.7], [0.9], [0.95]])
+  p = intervals.probability_of_improvement({"final": x}, {"final": y})["final"]
+  assert p.value == pytest.approx(0.44)
+  assert confirm.judge(p, 0.1) == "not separated"
+  assert confirm.judge(intervals.Estimate(0.5, 0.45, 0.58), 0.1) == "level"
+  assert confirm.judge(intervals.Estimate(0.5, 0.35, 0.58), 0.1) == "not separated"
+
+
+# -- the residual's schedule, a share of the run ----------------------------------------------
+def test_the_schedule_is_a_share_of_the_run_and_means_the_same_at_every_scale(tmp_path):
+  late = presets.preset("set2-disco6-linear-residual-late")
+  for steps, start, ramp in ((1200, 400, 200), (300, 100, 50), (600, 200, 100)):
+    config = late.replace(steps=steps)
+    assert (config.residual_start_step, config.residual_ramp_step_count) == (start, ramp)
+    assert fitting.method_name(config) == f"DiscoSyn6-L-reward-res0.3r{ramp}s{start}"
+  # a config of an older release, its schedule in train steps, loads as the same shares
+  old = late.replace(steps=1200).to_dict()
+  del old["residual_start"], old["residual_ramp"], old["closing_episodes"]
+  old.update(residual_start_steps=400, residual_ramp_steps=200)
+  (tmp_path / "config.json").write_text(json.dumps(old))
+  with pytest.raises(ValueError, match="discosyn upgrade .* closing_episodes = 0"):
+    config_lib.load(tmp_path / "config.json")
+  assert config_lib.upgrade(tmp_path / "config.json") == [
+      "closing_episodes", "residual_ramp (was residual_ramp_steps)",
+      "residual_start (was residual_start_steps)"]
+  upgraded = config_lib.load(tmp_path / "config.json")
+  assert upgraded == late.replace(steps=1200, closing_episodes=0)
+  # the schedule is a share of steps: a scheduled run continued with other steps is refused
+  assert any("share of steps" in m for m in config_lib.mismatches(upgraded, upgraded.replace(steps=2400)))
+  plain = presets.preset("set2-disco6-linear")
+  assert config_lib.mismatches(plain, plain.replace(steps=2400)) == []
