@@ -139,10 +139,10 @@ def train_config(args, base=None):
 
 
 def cmd_train(args) -> None:
-  from discosyn_jax import tasks
   from discosyn_jax import config as config_lib
   from discosyn_jax.run import owner
-  from discosyn_jax.training import devices, loop
+  from discosyn_jax.tasks import assemble
+  from discosyn_jax.training import devices
 
   if args.out == "":
     raise UsageError("--out is empty: name a run directory (or leave --out out)")
@@ -158,9 +158,8 @@ def cmd_train(args) -> None:
   if args.stop_at is not None and not 0 <= args.stop_at <= 1:
     raise ValueError(f"--stop-at is a success rate in [0, 1], not {args.stop_at}")
   print(f"run directory: {out}")
-  done = loop.train(config, out, make_trainer=lambda c: tasks.trainer(c, devices=args.devices),
-                    resume=args.resume, force=args.force, progress=not args.no_progress,
-                    stop_at=args.stop_at)
+  done = assemble.train(config, out, resume=args.resume, force=args.force,
+                        progress=not args.no_progress, stop_at=args.stop_at, devices=args.devices)
   print(next_commands(out, done["state"].step, config, done["results"]))
 
 
@@ -180,13 +179,13 @@ def next_commands(out: pathlib.Path, step, config, results) -> str:
 def cmd_eval(args) -> None:
   import jax
 
-  from discosyn_jax import tasks
-  from discosyn_jax.training import evaluation, loop
+  from discosyn_jax.tasks import assemble
+  from discosyn_jax.training import evaluation
 
   changes = {"backend": args.backend} if args.backend else {}
   if args.episodes is not None:
     changes["eval_envs"] = args.episodes
-  trainer, state = loop.load_trained(args.run, tasks.trainer, **changes)
+  trainer, state = assemble.load(args.run, **changes)
   results = evaluation.evaluate(trainer, state)
   print(evaluation.format_table(results, int(jax.device_get(state.step)), trainer.config))
 
@@ -206,9 +205,8 @@ def _check_scenes(trainer, run, what: str) -> None:
 
 
 def cmd_synergies(args) -> None:
-  from discosyn_jax import tasks
   from discosyn_jax.run import reading
-  from discosyn_jax.training import loop
+  from discosyn_jax.tasks import assemble
   from discosyn_jax.viz import synergy_pictures
 
   if args.export:
@@ -220,7 +218,7 @@ def cmd_synergies(args) -> None:
     print(artefact.export(args.run, path))
     return
   run_dir = reading.find_run_dir(args.run)
-  trainer, state = loop.load_trained(args.run, tasks.trainer, backend="native")  # host physics: pictures only
+  trainer, state = assemble.load(args.run, backend="native")  # host physics: pictures only
   _check_scenes(trainer, args.run, "picture")
   step = int(state.step)
   default = run_dir / _derived_name(args.run, run_dir, "synergies", step)
@@ -234,11 +232,11 @@ def cmd_synergies(args) -> None:
 def cmd_render(args) -> None:
   from discosyn_jax import tasks
   from discosyn_jax.run import reading
-  from discosyn_jax.training import loop
+  from discosyn_jax.tasks import assemble
   from discosyn_jax.viz import videos
 
   run_dir = reading.find_run_dir(args.run)
-  trainer, state = loop.load_trained(args.run, tasks.trainer, backend="native")
+  trainer, state = assemble.load(args.run, backend="native")
   _check_scenes(trainer, args.run, "film")
   videos.task_index(trainer.config, args.task)  # a bad task fails before any rollout
   name = _derived_name(args.run, run_dir, tasks.label(args.task), int(state.step))

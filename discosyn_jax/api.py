@@ -23,9 +23,8 @@ def train(config: TrainConfig | str = "quickstart", run_dir: str | pathlib.Path 
   {"results": {task: {"success", "return"}}, "run_dir", "state", "trainer", "compile_s"}.
   Ctrl-C stops the run cleanly and names the checkpoint it resumes from.
   """
-  from discosyn_jax import tasks
   from discosyn_jax.experiments import presets
-  from discosyn_jax.training import loop
+  from discosyn_jax.tasks import assemble
 
   name = config if isinstance(config, str) else "run"
   if isinstance(config, str):
@@ -33,8 +32,8 @@ def train(config: TrainConfig | str = "quickstart", run_dir: str | pathlib.Path 
   config = config.validate()
   run_dir = pathlib.Path(run_dir if run_dir is not None else f"runs/{name}-seed{config.seed}")
   on_eval = None if progress_fn is None else (lambda _, row: progress_fn(row["env_steps"], row))
-  done = loop.train(config, run_dir, make_trainer=tasks.trainer, resume=resume, force=force,
-                    progress=progress, log=log, stop_at=stop_at, on_eval=on_eval)
+  done = assemble.train(config, run_dir, resume=resume, force=force, progress=progress, log=log,
+                        stop_at=stop_at, on_eval=on_eval)
   return {**done, "run_dir": run_dir}
 
 
@@ -42,13 +41,13 @@ def evaluate(run: str | pathlib.Path, *, episodes: int | None = None,
              backend: str | None = None) -> dict[str, dict[str, float]]:
   """The deterministic policy of a run (its newest good checkpoint) or of one checkpoint:
   {task: {"success", "return"}} over `episodes` per task (default: the run's eval_envs)."""
-  from discosyn_jax import tasks
-  from discosyn_jax.training import evaluation, loop
+  from discosyn_jax.tasks import assemble
+  from discosyn_jax.training import evaluation
 
   changes = {"backend": backend} if backend else {}
   if episodes is not None:
     changes["eval_envs"] = episodes
-  trainer, state = loop.load_trained(pathlib.Path(run), tasks.trainer, **changes)
+  trainer, state = assemble.load(pathlib.Path(run), **changes)
   return evaluation.evaluate(trainer, state)
 
 

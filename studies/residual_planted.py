@@ -73,8 +73,7 @@ def main(argv=None):
   parser.add_argument("--steps", type=int, help="train steps (default: the preset's)")
   args = parser.parse_args(argv)
 
-  from discosyn_jax import tasks
-  from discosyn_jax.training import loop
+  from discosyn_jax.tasks import assemble
 
   names = register_outside_tasks(args.outside)
   rows = []
@@ -82,9 +81,8 @@ def main(argv=None):
     for seed in args.seeds:
       run_dir = args.out / f"{variant}-outside{args.outside}-seed{seed}"
       if not (run_dir / "final").exists():  # one run at a time; a finished one is kept
-        loop.train(config_for(variant, seed, names, args.steps), run_dir,
-                   make_trainer=tasks.trainer, force=run_dir.exists(), progress=False,
-                   log=lambda *a: None)
+        assemble.train(config_for(variant, seed, names, args.steps), run_dir,
+                       force=run_dir.exists(), progress=False, log=lambda *a: None)
       rows.append((variant, seed, summary(run_dir)))
   print("| variant | seed | env steps | final success | success, mean over the curve | "
         "final return | mean abs D(z) | mean abs rho r | overlap with the span |")

@@ -198,12 +198,11 @@ def saves(run_dir: pathlib.Path) -> None:
 def library(run_dir: pathlib.Path) -> int:
   import dataclasses
 
-  from discosyn_jax import tasks
-  from discosyn_jax.training import loop
+  from discosyn_jax.tasks import assemble
 
   config = dataclasses.replace(TOY, steps=100000, eval_every=0)
   try:
-    loop.train(config, run_dir, make_trainer=tasks.trainer, progress=False, log=lambda _: None)
+    assemble.train(config, run_dir, progress=False, log=lambda _: None)
   except KeyboardInterrupt as err:
     print(f"{type(err).__name__}: {err}", flush=True)
     return 1

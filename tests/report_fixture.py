@@ -15,23 +15,16 @@ import tempfile
 import numpy as np
 import pytest
 
-from discosyn_jax.training.trainer import Trainer
 from discosyn_jax.experiments import paper, presets, record, report
-from tests.toy_env import ReachAction
+from tests import toy_env
 
 FIXTURE = pathlib.Path(__file__).resolve().parent / "fixtures" / "report-ci"
-TARGET = np.linspace(-0.8, 0.8, 20)
-ENVS = {"a": lambda: ReachAction(TARGET), "b": lambda: ReachAction(-TARGET, obs_size=5),
-        "c": lambda: ReachAction(0.5 * TARGET), "g": lambda: ReachAction(0.3 * TARGET)}
+toy_env.register()  # tasks a, b, c, g
 SETS = {"set1": ("a", "b"), "set2": ("b", "c"), "sparse": ("g",), "unseen-set1": ("c",),
         "unseen-set2": ("a",)}
 # the steps kept: every section of the report, few runs
 PLANS = {"discosyn-set1": ("DiscoSyn3-L", "Random3-L-zfree", "Random3-L-matched"),
          "baselines-set1": ("PCA4",), "sparse": None, "transfer": None}
-
-
-def make_trainer(config):
-  return Trainer(config, envs=[ENVS[name]() for name in config.tasks])
 
 
 def make(dest: pathlib.Path = FIXTURE) -> pathlib.Path:
@@ -43,7 +36,7 @@ def make(dest: pathlib.Path = FIXTURE) -> pathlib.Path:
   with pytest.MonkeyPatch.context() as patch, tempfile.TemporaryDirectory() as runs:
     patch.setattr(presets, "PRESETS", small)
     for name, methods in PLANS.items():
-      paper.run(name, pathlib.Path(runs), "ci", (0, 1), make_trainer=make_trainer, task_sets=SETS,
+      paper.run(name, pathlib.Path(runs), "ci", (0, 1), task_sets=SETS,
                 methods=methods, log=lambda *a: None)
     shutil.rmtree(dest, ignore_errors=True)
     record.keep(pathlib.Path(runs), dest)

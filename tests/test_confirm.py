@@ -68,8 +68,7 @@ def test_the_final_is_the_mean_of_the_last_k_evaluations(tmp_path):
 
 
 def test_every_run_ends_with_a_closing_evaluation_kept_in_its_record(tmp_path):
-  done = loop.train(TOY, tmp_path / "run", make_trainer=toy_trainer, progress=False,
-                    log=lambda *_: None)
+  done = loop.train(toy_trainer(TOY), tmp_path / "run", progress=False, log=lambda *_: None)
   closing = json.loads((tmp_path / "run" / layout.CLOSING_FILE).read_text())
   assert closing["step"] == 3 and closing["episodes"] == 16
   assert set(closing) >= {"a/success", "a/return", "b/success", "b/return"}
@@ -83,7 +82,7 @@ def test_every_run_ends_with_a_closing_evaluation_kept_in_its_record(tmp_path):
   assert layout.CLOSING_FILE not in record.files(TOY.replace(closing_episodes=0))
   (run,), _ = report_runs.find([tmp_path / "run"])
   assert run.closing["b/success"] == closing["b/success"]
-  none = loop.train(TOY.replace(closing_episodes=0), tmp_path / "none", make_trainer=toy_trainer,
+  none = loop.train(toy_trainer(TOY.replace(closing_episodes=0)), tmp_path / "none",
                     progress=False, log=lambda *_: None)
   assert none["closing"] is None and not (tmp_path / "none" / layout.CLOSING_FILE).exists()
 

@@ -15,17 +15,16 @@ from discosyn_jax.config import TrainConfig
 from discosyn_jax.run import checkpoints
 from discosyn_jax.synergies import diagnostics, discovery, fitting
 from discosyn_jax.training.trainer import Trainer
+from discosyn_jax.tasks import assemble
 from discosyn_jax.experiments import paper, presets, report
 from discosyn_jax.tasks import planted
-from tests.toy_env import ReachAction
+from tests import toy_env
 
 TARGET = np.linspace(-0.8, 0.8, 20)
-ENVS = {"a": lambda: ReachAction(TARGET), "b": lambda: ReachAction(-TARGET, obs_size=5)}
+toy_env.register()  # tasks a, b
 DECODER = "params.params.synergy_decoder."
 
 
-def make_trainer(config):
-  return Trainer(config, envs=[ENVS[name]() for name in config.tasks])
 
 
 # -- the overlap -------------------------------------------------------------------
@@ -119,7 +118,7 @@ def test_a_decoder_trained_on_planted_tasks_finds_the_span():
 
 def test_the_decoder_weight_decay_shrinks_the_decoder_weights_only():
   config = TrainConfig(squash_z=False, decoder_init="random", tasks=("a",), n_synergies=3)
-  params = make_trainer(config).initial_params()
+  params = assemble.trainer(config).initial_params()
   zero = jax.tree.map(jnp.zeros_like, params)
   plain = ppo.optimizer(config)
   decayed = ppo.optimizer(config.replace(decoder_weight_decay=2.0))
@@ -149,12 +148,12 @@ def test_the_decoder_weight_decay_shrinks_the_decoder_weights_only():
 def test_the_initial_decoder_is_rebuilt_from_the_config_alone(decoder):
   config = TrainConfig(squash_z=False, decoder_init="random", tasks=("a", "b"), n_synergies=3, decoder=decoder, seed=7,
                        decoder_hidden=(16, 16))
-  from_trainer = make_trainer(config).initial_params()["params"]["synergy_decoder"]
+  from_trainer = assemble.trainer(config).initial_params()["params"]["synergy_decoder"]
   rebuilt = networks.random_decoder(config, 20)
   jax.tree.map(np.testing.assert_array_equal, rebuilt, from_trainer)
   basis = discovery.initial_basis(config, 20)
-  expected = diagnostics.synergy_basis(make_trainer(config).model,
-                                       make_trainer(config).initial_params())
+  expected = diagnostics.synergy_basis(assemble.trainer(config).model,
+                                       assemble.trainer(config).initial_params())
   np.testing.assert_allclose(basis, expected, atol=1e-6)
 
 
@@ -184,7 +183,7 @@ def test_the_controls_build_run_and_show_in_the_report(tmp_path):
   assert plan["Random3-L-matched"].config.replace(decoder_from="") == random
   assert "Random3-NL-zfree" in plan and "Random3-NL-matched" not in plan  # linear only
   methods = ["DiscoSyn3-L", "Random3-L-zfree", "Random3-L-matched"]
-  paper.run("discosyn-set1", tmp_path, "ci", make_trainer=make_trainer, task_sets=sets,
+  paper.run("discosyn-set1", tmp_path, "ci", task_sets=sets,
             methods=methods[1:], log=lambda *a: None)
   folder = lambda m: tmp_path / f"{m.lower()}-set1-seed0"
   for m in methods:
@@ -210,7 +209,7 @@ def test_the_controls_build_run_and_show_in_the_report(tmp_path):
 def test_an_annealed_decay_falls_linearly_to_nothing_over_its_train_steps():
   config = TrainConfig(squash_z=False, decoder_init="random", tasks=("a",), n_synergies=3, num_minibatches=2, update_epochs=2,
                        decoder_weight_decay=2.0, decoder_weight_decay_steps=3)
-  params = make_trainer(config).initial_params()
+  params = assemble.trainer(config).initial_params()
   zero = jax.tree.map(jnp.zeros_like, params)
   kernel = lambda tree: tree["params"]["synergy_decoder"]["synergies"]["kernel"]
   optimizer = ppo.optimizer(config)

@@ -17,22 +17,18 @@ from discosyn_jax.agent import networks
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.run import checkpoints, layout, logs, reading
 from discosyn_jax.synergies import fitting
-from discosyn_jax.training import loop
-from discosyn_jax.training.trainer import Trainer, _episode_metrics
+from discosyn_jax.training.trainer import _episode_metrics
+from discosyn_jax.tasks import assemble
 from discosyn_jax.experiments import paper, presets, record, report, report_runs
 from tests import reference
-from tests.toy_env import ReachAction
+from tests import toy_env
 
-TARGET = np.linspace(-0.8, 0.8, 20)
-ENVS = {"a": lambda: ReachAction(TARGET), "b": lambda: ReachAction(-TARGET, obs_size=5),
-        "g": lambda: ReachAction(0.3 * TARGET)}
+toy_env.register()  # tasks a, b, g
 SETS = {"set1": ("a", "b"), "sparse": ("g",)}
 DECODER = "params.params.synergy_decoder."
 PRESETS = presets.PRESETS  # the hand's, before the toy envs' start replaces them
 
 
-def make_trainer(config):
-  return Trainer(config, envs=[ENVS[name]() for name in config.tasks])
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -50,7 +46,7 @@ def paper_start():
 def experiments(paper_start, tmp_path_factory):
   out = tmp_path_factory.mktemp("experiments")
   for name in ("baselines-set1", "sparse"):
-    paper.run(name, out, "ci", make_trainer=make_trainer, task_sets=SETS, log=lambda *a: None)
+    paper.run(name, out, "ci", task_sets=SETS, log=lambda *a: None)
   return out
 
 
@@ -137,7 +133,7 @@ def test_first_reward_step_is_logged():
 def test_noiseless_decoder_acts_with_its_mean():
   config = TrainConfig(squash_z=False, decoder_init="random", tasks=("a",), n_synergies=3, decoder_noise=False, alpha3=0.0,
                        num_envs=4, unroll_length=5, num_minibatches=2)
-  trainer = make_trainer(config)
+  trainer = assemble.trainer(config)
   state = trainer.init()
   z, a, log_prob = trainer.act(state.params, 0, np.ones((4, 3)), jax.random.PRNGKey(1))
   mean, _ = trainer.model.apply(state.params, z, method=trainer.model.decode)
@@ -195,7 +191,7 @@ def test_the_random_decoder_control_keeps_the_learned_runs_initial_decoder(exper
   frozen = reading.load_run(experiments / "sparse-synergies-seed0")[0]
   assert config == frozen.replace(decoder_from="")  # only the decoder's source differs
   learned = reading.load_run(experiments / "discosyn3-l-set1-seed0")[0]
-  start = make_trainer(learned).initial_params()["params"]["synergy_decoder"]
+  start = assemble.trainer(learned).initial_params()["params"]["synergy_decoder"]
   trained = final_decoder(control)
   np.testing.assert_array_equal(trained["synergies.kernel"], start["synergies"]["kernel"])
   # the discosyn experiment pairs every DiscoSyn run with its control (the other controls:
@@ -213,7 +209,7 @@ def test_finished_steps_are_kept(experiments):
   final = experiments / "pca4-set1-seed0" / "final"
   before = final.stat().st_mtime_ns
   logs = []
-  paper.run("baselines-set1", experiments, "ci", make_trainer=make_trainer, task_sets=SETS,
+  paper.run("baselines-set1", experiments, "ci", task_sets=SETS,
             log=logs.append)
   assert final.stat().st_mtime_ns == before
   assert all("done already" in line for line in logs)
@@ -221,7 +217,7 @@ def test_finished_steps_are_kept(experiments):
   label = experiments / "pca4-set1-seed0" / layout.EXPERIMENT_FILE
   meta = label.read_text()
   label.unlink()
-  paper.run("baselines-set1", experiments, "ci", make_trainer=make_trainer, task_sets=SETS,
+  paper.run("baselines-set1", experiments, "ci", task_sets=SETS,
             log=lambda *a: None)
   assert final.stat().st_mtime_ns == before and label.read_text() == meta
   # a finished run without its record (made before records were written) gets it from its
@@ -231,7 +227,7 @@ def test_finished_steps_are_kept(experiments):
   for name in ("z.npz", "decoder.npz", "metrics.jsonl.xz"):
     (source / name).unlink()
   logs = []
-  paper.run("sparse", experiments, "ci", make_trainer=make_trainer, task_sets=SETS,
+  paper.run("sparse", experiments, "ci", task_sets=SETS,
             log=logs.append)
   assert "[discosyn3-l-set1-seed0] its record, from its final checkpoint" in logs
   assert record.complete(source, reading.load_run(source)[0])
@@ -240,12 +236,12 @@ def test_finished_steps_are_kept(experiments):
   assert (source / "metrics.jsonl.xz").read_bytes() == before["metrics.jsonl.xz"]
   # another scale asks for another config: the finished run is not silently replaced
   with pytest.raises(ValueError, match="does not match"):
-    paper.run("baselines-set1", experiments, "cpu", make_trainer=make_trainer, task_sets=SETS,
+    paper.run("baselines-set1", experiments, "cpu", task_sets=SETS,
               log=lambda *a: None)
 
 
 def test_report_lists_every_method_and_task(experiments, tmp_path):
-  path = report.write([experiments], tmp_path / "report", make_trainer=make_trainer)
+  path = report.write([experiments], tmp_path / "report")
   text = path.read_text()
   table = text.split("### set1")[1].split("###")[0].split("##")[0]
   for method in ("PPO", "PCA4", "AE4", "PCA6", "AE6", "DiscoSyn3-L"):
@@ -360,12 +356,12 @@ def test_a_frozen_run_resumes_without_its_decoder_source(experiments, tmp_path):
   source = fitting.save(tmp_path / "pca4.npz", params, fields, method="PCA")
   config = TrainConfig(tasks=("a",), **{**paper.SCALES["ci"].train, "steps": 1},
                        **fitting.frozen_fields(fitting.read(source)[0], source))
-  loop.train(config, tmp_path / "run", make_trainer=make_trainer, progress=False, log=lambda *a: None)
+  assemble.train(config, tmp_path / "run", progress=False, log=lambda *a: None)
   source.unlink()
   with pytest.raises(ValueError, match="does not exist"):
     fitting.load_decoder(config.decoder_from, config)
-  out = loop.train(config.replace(steps=2), tmp_path / "run", resume=True, progress=False,
-                   make_trainer=make_trainer, log=lambda *a: None)
+  out = assemble.train(config.replace(steps=2), tmp_path / "run", resume=True, progress=False,
+                       log=lambda *a: None)
   assert int(out["state"].step) == 2
   np.testing.assert_array_equal(final_decoder(tmp_path / "run")["synergies.kernel"],
                                 params["synergies"]["kernel"])
@@ -373,7 +369,7 @@ def test_a_frozen_run_resumes_without_its_decoder_source(experiments, tmp_path):
 
 def test_transfer_from_a_given_decoder(experiments, tmp_path):
   logs = []
-  paper.run("sparse", tmp_path, "ci", make_trainer=make_trainer, task_sets=SETS,
+  paper.run("sparse", tmp_path, "ci", task_sets=SETS,
             decoder_from=experiments / "ae4-set1-seed0" / ".." / "synergies-set1-seed0" / "ae4.npz",
             log=logs.append)
   assert not (tmp_path / "discosyn3-l-set1-seed0").exists()  # no DiscoSyn run of its own
@@ -472,23 +468,23 @@ def test_a_folder_of_records_continues_and_reports_without_checkpoints(experimen
   # moved), nothing is trained
   logged = []
   for name in ("baselines-set1", "sparse"):
-    paper.run(name, kept, "ci", make_trainer=make_trainer, task_sets=SETS, log=logged.append)
+    paper.run(name, kept, "ci", task_sets=SETS, log=logged.append)
   assert logged and all("done already" in line for line in logged)
   assert not list(kept.rglob("final"))
   # the report from the records is the report from the runs, table for table
-  texts = [report.write([folder], folder / "report", make_trainer=make_trainer).read_text()
+  texts = [report.write([folder], folder / "report").read_text()
            for folder in (experiments, kept)]
   assert texts[0] == texts[1] and "`..`" in texts[0] and "tsne-set1.png" in texts[0]
   # a step not kept is trained again from the records of the steps it needs
   shutil.rmtree(kept / "sparse-synergies-seed0")
-  paper.run("sparse", kept, "ci", make_trainer=make_trainer, task_sets=SETS, log=lambda *a: None)
+  paper.run("sparse", kept, "ci", task_sets=SETS, log=lambda *a: None)
   np.testing.assert_array_equal(final_decoder(kept / "sparse-synergies-seed0")["synergies.kernel"],
                                 final_decoder(source)["synergies.kernel"])
   # a fit not kept: its PPO run, a record alone, is trained again (from step 0, to the same
   # evaluations) to be rolled out; the frozen rows of the fit stay done
   shutil.rmtree(kept / "synergies-set1-seed0")
   logged = []
-  paper.run("baselines-set1", kept, "ci", make_trainer=make_trainer, task_sets=SETS,
+  paper.run("baselines-set1", kept, "ci", task_sets=SETS,
             methods=["PCA4"], log=logged.append)
   assert any("ppo-set1-seed0] finished, but its record alone" in line for line in logged)
   assert "[pca4-set1-seed0] done already; kept" in logged
@@ -520,7 +516,7 @@ def test_methods_run_with_the_runs_they_need(tmp_path):
   whole = {s.name: s for s in plan("baselines-set1")}
   logs = []
   folders = paper.run("baselines-set1", tmp_path, "ci", methods=["PPO"], task_sets=SETS,
-                      make_trainer=make_trainer, log=logs.append)
+                      log=logs.append)
   assert folders == [tmp_path / "ppo-set1-seed0"] and whole["ppo-set1-seed0"].done(tmp_path)
   assert sorted(p.name for p in tmp_path.iterdir()) == ["ppo-set1-seed0"]
 

@@ -285,7 +285,7 @@ def run_logs(run_dir: pathlib.Path) -> dict:
 @pytest.fixture(scope="module")
 def unbroken(tmp_path_factory):
   run_dir = tmp_path_factory.mktemp("runs") / "unbroken"
-  result = loop.train(TOY, run_dir, make_trainer=lambda _: toy_trainer(), progress=False, log=quiet)
+  result = loop.train(toy_trainer(), run_dir, progress=False, log=quiet)
   return run_dir, result
 
 
@@ -312,11 +312,11 @@ def test_a_run_killed_inside_a_save_and_mid_line_resumes_to_the_unbroken_runs_lo
   with pytest.MonkeyPatch.context() as patch:
     patch.setattr(atomic, "swap_in", killed_before_swapping_in_checkpoint_4)
     with pytest.raises(Killed):
-      loop.train(TOY, run_dir, make_trainer=lambda _: toy_trainer(), progress=False, log=quiet)
+      loop.train(toy_trainer(), run_dir, progress=False, log=quiet)
   with open(run_dir / layout.METRICS_FILE, "a") as f:  # and a line the kill cut short
     f.write('{"step": 5, "loss": 0.2')
   assert json.loads((run_dir / layout.EVAL_FILE).read_text().splitlines()[-1])["step"] == 4
-  resumed = loop.train(TOY, run_dir, resume=True, make_trainer=lambda _: toy_trainer(), progress=False,
+  resumed = loop.train(toy_trainer(), run_dir, resume=True, progress=False,
                        log=print)
   out, err = capfd.readouterr()
   assert f"resumed from {run_dir / 'checkpoints' / '2'} at step 2" in out
@@ -340,7 +340,7 @@ def test_a_run_killed_at_a_random_instant_resumes_to_the_unbroken_runs_logs(unbr
   time.sleep(random.Random(seed).uniform(0.0, 2.0))
   proc.kill()
   proc.communicate()
-  loop.train(TOY, run_dir, resume=True, make_trainer=lambda _: toy_trainer(), progress=False, log=quiet)
+  loop.train(toy_trainer(), run_dir, resume=True, progress=False, log=quiet)
   assert run_logs(run_dir) == run_logs(straight_dir), seed
 
 
@@ -689,7 +689,8 @@ def test_force_keeps_the_old_run_whole_until_the_new_one_has_a_checkpoint(unbrok
   # a --force that reaches its first checkpoint replaces the run, the user's files too
   assert cli.main(["train", "--out", str(run_dir), "--force", "--no-progress", "--seed", "3"]) == 0
   assert sorted(p.name for p in run_dir.iterdir()) == sorted(
-      ["checkpoints", "config.json", "eval.jsonl", "final", "metrics.jsonl", "plots", "tb"])
+      ["checkpoints", "closing.json", "config.json", "eval.jsonl", "final", "metrics.jsonl", "plots",
+       "tb"])
   assert json.loads((run_dir / "config.json").read_text())["seed"] == 3
 
 

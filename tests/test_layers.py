@@ -94,8 +94,24 @@ def test_no_module_imports_itself_back():
 def test_the_walk_sees_the_imports_it_judges():
   edges = graph()  # the walk itself: a test that finds no import could never fail
   assert "discosyn_jax.run.checkpoints" in edges["discosyn_jax.training.loop"]
-  assert "discosyn_jax.training.trainer" in edges["discosyn_jax.tasks.registry"]  # inside a function
+  assert "discosyn_jax.training.trainer" in edges["discosyn_jax.tasks.assemble"]
+  assert "discosyn_jax.tasks.assemble" in edges["discosyn_jax.experiments.record"]  # inside a function
   assert TASKS in edges["discosyn_jax.experiments.presets"]
+
+
+# what builds a run's Trainer and trains it: the environment layer imports none of it
+TRAINING = ("discosyn_jax.training", "discosyn_jax.agent", "discosyn_jax.experiments")
+
+
+def test_the_environment_layer_knows_nothing_of_training():
+  """The envs and the task registry build environments only; the one place that assembles
+  envs and a Trainer from a config is discosyn_jax.tasks.assemble."""
+  environment = [name for name in graph() if name.startswith(("discosyn_jax.env", "discosyn_jax.tasks"))
+                 and name != "discosyn_jax.tasks.assemble"]
+  assert "discosyn_jax.tasks.registry" in environment and "discosyn_jax.env.hand_env" in environment
+  wrong = [f"{name} imports {target}" for name in environment for target in graph()[name]
+           if target.startswith(TRAINING)]
+  assert not wrong, "\n".join(sorted(wrong))
 
 
 # the library's parts (docs/ARCHITECTURE.md), each importing only parts of a lower rank; at

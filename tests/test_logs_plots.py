@@ -7,7 +7,7 @@ import pytest
 from PIL import Image
 
 from discosyn_jax.config import TrainConfig
-from discosyn_jax.run import layout, logs
+from discosyn_jax.run import layout, logs, progress
 from discosyn_jax.training import loop
 from discosyn_jax.training.trainer import Trainer
 from discosyn_jax.viz import plots
@@ -24,7 +24,8 @@ def toy_run(tmp_path_factory):
   """Four train steps on two toy tasks (episodes of 5 steps end in every rollout)."""
   run_dir = tmp_path_factory.mktemp("runs") / "toy"
   trainer = Trainer(TOY, envs=[ReachAction(0.3, episode_length=5), ReachAction(-0.3, episode_length=5)])
-  loop.train(TOY, run_dir, make_trainer=lambda _: trainer, progress=False, log=lambda *_: None)
+  loop.train(trainer, run_dir, progress=False, log=lambda *_: None,  # the assembler's hook
+             on_end=lambda: plots.run_curves(run_dir, run_dir / layout.PLOTS_DIR))
   return run_dir
 
 
@@ -110,7 +111,7 @@ def test_curves_of_a_folder_without_a_run_or_without_steps_fail(tmp_path):
 
 
 def test_progress_off_a_terminal_is_a_line_every_tenth_of_the_run(capsys):
-  bar = loop._progress(True, 5, 40)  # resumed at step 5; pytest's stderr is not a terminal
+  bar = progress.bar(True, 5, 40)  # resumed at step 5; pytest's stderr is not a terminal
   for step in range(6, 41):
     bar.set_postfix_str(f"valve1:{step}%", refresh=False)
     bar.update(1)
@@ -120,4 +121,4 @@ def test_progress_off_a_terminal_is_a_line_every_tenth_of_the_run(capsys):
   lines = err.splitlines()
   assert [line.split(",")[0] for line in lines] == [f"step {n}/40" for n in range(8, 41, 4)]
   assert lines[-1].endswith("steps/s valve1:40%")
-  assert loop._progress(False, 0, 40) is None
+  assert progress.bar(False, 0, 40) is None

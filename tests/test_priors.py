@@ -8,8 +8,7 @@ import pytest
 from discosyn_jax import tasks
 from discosyn_jax import config as config_lib
 from discosyn_jax.agent import networks
-from discosyn_jax.synergies import diagnostics, fitting, priors
-from discosyn_jax.training import loop
+from discosyn_jax.synergies import diagnostics, fitting, priors, start
 from discosyn_jax.experiments import presets
 
 TINY = dict(num_envs=2, unroll_length=4, num_minibatches=2, update_epochs=1, steps=1,
@@ -62,7 +61,7 @@ def test_every_seed_of_a_run_starts_in_the_same_subspace_and_only_there():
         tasks=("valve3",), seed=seed, **TINY).validate()
     trainer = tasks.trainer(config)
     starts.append(fitting.basis(fitting.architecture(config.to_dict()),
-                                  loop.starting_decoder(trainer)))
+                                  start.starting_decoder(trainer)))
     random_start = fitting.basis(fitting.architecture(config.to_dict()),
                                    networks.random_decoder(config, 20))
   assert diagnostics.overlap(*starts) == pytest.approx(1.0, abs=1e-5)

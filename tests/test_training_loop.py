@@ -15,6 +15,7 @@ from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import wrappers
 from discosyn_jax.run import checkpoints, owner, reading
+from discosyn_jax.tasks import assemble
 from discosyn_jax.training import loop
 from discosyn_jax.training.trainer import Trainer
 from tests.toy_env import ReachAction
@@ -30,7 +31,7 @@ VALVE = TrainConfig(tasks=("valve1",), steps=4, checkpoint_every=2, **TINY)
 def valve_run(tmp_path_factory):
   """A 4-step run on valve1, checkpointed at steps 2 and 4."""
   run_dir = tmp_path_factory.mktemp("runs") / "straight"
-  result = loop.train(VALVE, run_dir, make_trainer=tasks.trainer, progress=False, log=lambda *_: None)
+  result = assemble.train(VALVE, run_dir, progress=False, log=lambda *_: None)
   return run_dir, result
 
 
@@ -84,14 +85,14 @@ def test_resume_gives_the_same_state_as_an_unbroken_run(valve_run, tmp_path):
   straight_dir, straight = valve_run
   assert (straight_dir / "final").is_dir() and (straight_dir / "checkpoints" / "2").is_dir()
   broken = tmp_path / "broken"
-  loop.train(VALVE.replace(steps=2), broken, make_trainer=tasks.trainer, progress=False, log=lambda *_: None)
+  assemble.train(VALVE.replace(steps=2), broken, progress=False, log=lambda *_: None)
   # the unbroken run's periodic checkpoint at step 2 holds this run's final state
   trainer = tasks.trainer(VALVE)
   jax.tree.map(np.testing.assert_array_equal,
                jax.device_get(loop.restore(trainer, straight_dir / "checkpoints" / "2")),
                jax.device_get(loop.restore(trainer, broken / "final")))
   shutil.rmtree(broken / "final")  # resume from the periodic checkpoint
-  resumed = loop.train(VALVE, broken, resume=True, make_trainer=tasks.trainer, progress=False, log=lambda *_: None)
+  resumed = assemble.train(VALVE, broken, resume=True, progress=False, log=lambda *_: None)
   a, b = jax.device_get(straight["state"]), jax.device_get(resumed["state"])
   assert int(b.step) == 4
   # bit for bit: parameters, optimiser moments, normalisers, env physics, rng
@@ -126,10 +127,10 @@ def test_non_finite_training_stops_and_keeps_the_last_good_checkpoint(tmp_path):
   config = TrainConfig(tasks=("a",), steps=2, checkpoint_every=2, **{**TINY, "backend": "auto"})
   run_dir = tmp_path / "run"
   good = Trainer(config, envs=[ReachAction(0.3)])
-  loop.train(config, run_dir, make_trainer=lambda _: good, progress=False, log=lambda *_: None)
+  loop.train(good, run_dir, progress=False, log=lambda *_: None)
   bad = Trainer(config.replace(steps=4), envs=[ReachAction(np.full(20, np.nan))])
   with pytest.raises(loop.TrainingDiverged, match="non-finite .* step 3.*final"):
-    loop.train(config.replace(steps=4), run_dir, resume=True, make_trainer=lambda _: bad, progress=False,
+    loop.train(bad, run_dir, resume=True, progress=False,
                log=lambda *_: None)
   assert int(loop.restore(good, run_dir / "final").step) == 2
   assert sorted(p.name for p in (run_dir / "checkpoints").iterdir()) == ["2"]
@@ -197,15 +198,15 @@ def test_stop_at_ends_the_run_at_the_first_evaluation_that_reaches_it(tmp_path):
   config = VALVE.replace(steps=6, eval_every=2, checkpoint_every=0)
   logged = []
   # success >= 0 holds at any evaluation: the run ends at the first, step 2, as a whole run
-  done = loop.train(config, tmp_path / "run", make_trainer=tasks.trainer, progress=False, log=logged.append, stop_at=0.0)
+  done = assemble.train(config, tmp_path / "run", progress=False, log=logged.append, stop_at=0.0)
   assert int(done["state"].step) == 2 and any("the run ends here" in line for line in logged)
   evals = [json.loads(l) for l in (tmp_path / "run" / "eval.jsonl").read_text().splitlines()]
   assert [row["step"] for row in evals] == [2]  # that evaluation is the final one, not redone
   assert len((tmp_path / "run" / "metrics.jsonl").read_text().splitlines()) == 2
-  _, state = loop.load_trained(tmp_path / "run", tasks.trainer)
+  _, state = assemble.load(tmp_path / "run")
   assert int(state.step) == 2
   # a rate above any success never stops it
-  done = loop.train(config, tmp_path / "all", make_trainer=tasks.trainer, progress=False, log=logged.append, stop_at=1.01)
+  done = assemble.train(config, tmp_path / "all", progress=False, log=logged.append, stop_at=1.01)
   assert int(done["state"].step) == 6
 
 

@@ -7,6 +7,7 @@ final action within 0.1 (RMS) of the target. No physics, so training tests stay 
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 from brax.envs.base import Env, State
 
 
@@ -100,3 +101,35 @@ class PhysicsReach(ReachAction):
     physics = self.physics.step(physics, action[:1])
     state = super().step(state.replace(pipeline_state=key), action)
     return state.replace(pipeline_state=(state.pipeline_state, physics))
+
+
+# The toy tasks the experiment and report tests run, registered whole in the task registry
+# (registry.register_env) so that they go through the one assembler as any task does.
+TARGET = np.linspace(-0.8, 0.8, 20)
+
+
+def _a():
+  return ReachAction(TARGET)
+
+
+def _b():
+  return ReachAction(-TARGET, obs_size=5)
+
+
+def _c():
+  return ReachAction(0.5 * TARGET)
+
+
+def _g():
+  return ReachAction(0.3 * TARGET)
+
+
+TOY_TASKS = {"a": _a, "b": _b, "c": _c, "g": _g}
+
+
+def register() -> None:
+  """Register the toy tasks a, b, c and g (again: a no-op)."""
+  from discosyn_jax.tasks import registry
+
+  for name, make in TOY_TASKS.items():
+    registry.register_env(name, make)

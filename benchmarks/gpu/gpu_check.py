@@ -52,7 +52,7 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
 from discosyn_jax import tasks  # noqa: E402
-from discosyn_jax.training import loop  # noqa: E402
+from discosyn_jax.synergies import start  # noqa: E402
 from discosyn_jax.experiments import bench, paper  # noqa: E402
 from studies import physics_study  # noqa: E402
 
@@ -171,7 +171,7 @@ def start_method(log: Log, method: str, config, evaluations: bool = True):
     return out
 
   trainer = phase("build", lambda: tasks.trainer(config))
-  decoder = phase("prior", lambda: loop.starting_decoder(trainer))
+  decoder = phase("prior", lambda: start.starting_decoder(trainer))
   state = phase("init", lambda: trainer.init(decoder_params=decoder))
   train_step = phase("train_compile", lambda: trainer.train_step.lower(state).compile())
   evaluate = None

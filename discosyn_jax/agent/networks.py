@@ -199,7 +199,7 @@ def build(config, obs_sizes: Sequence[int], action_size: int) -> DiscoSyn:
 
 
 # Top-level parameter collections by role: the optimiser labels them (ppo.optimizer), the
-# gradient norms are logged per role (train.py).
+# gradient norms are logged per role (trainer.py).
 def role(name: str) -> str:
   # a posture and a residual head are their task's
   if name.startswith(("heads_", "residuals_")) or name == "postures":

@@ -3,7 +3,7 @@ where there is one) -> a, with
 log pi(z, a | s, n) = log pi(z | s, n) + log p(a | z) (a decoder without noise, the
 sequential baselines' fixed spaces, adds no log p(a | z)). With a residual (residual.py)
 the action adds rho r, r from task n's residual head, and p(a | z) becomes the decoder's
-Gaussian with r integrated out. Acting (train.py, evaluation.py) and the PPO loss (ppo.py)
+Gaussian with r integrated out. Acting (trainer.py, evaluation.py) and the PPO loss (ppo.py)
 both go through it."""
 
 from __future__ import annotations

@@ -207,7 +207,6 @@ def run(plan_path, out, *, progress: bool = False, log=print) -> list[pathlib.Pa
   """Run (or continue) every run of the plan in `out`; the plan is copied there first. A run
   that another process is writing is passed by, so that the same command started twice
   trains two runs side by side."""
-  from discosyn_jax import tasks
   from discosyn_jax.run import owner
 
   plan = load(plan_path)
@@ -220,14 +219,14 @@ def run(plan_path, out, *, progress: bool = False, log=print) -> list[pathlib.Pa
     folders.append(out / step.name)
     if step.done(out):
       log(f"[{step.name}] done already; kept")
-      step.settle(out, tasks.trainer, log)
+      step.settle(out, log)
       continue
     if owner.writer_of(out / step.name):
       log(f"[{step.name}] being trained by another process; passed by")
       continue
     log(f"[{step.name}] train")
     try:
-      step.run(out, tasks.trainer, progress, log)
+      step.run(out, progress, log)
     except owner.Busy:  # taken by another process since the look above
       log(f"[{step.name}] being trained by another process; passed by")
   return folders

@@ -50,7 +50,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import pathlib
-from typing import Any, Callable
+from typing import Any
 
 import jax
 import numpy as np
@@ -60,7 +60,8 @@ from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import hands
 from discosyn_jax.run import layout
 from discosyn_jax.synergies import fitting
-from discosyn_jax.training import evaluation, loop
+from discosyn_jax.tasks import assemble
+from discosyn_jax.training import evaluation
 from discosyn_jax.experiments import presets, record
 
 # the task sets of discosyn_jax/tasks/sets.py, the unseen tasks split by the set whose synergies they take
@@ -138,15 +139,14 @@ class Train:
     """A finished run of this config: its final checkpoint, or its record alone."""
     return record.finished(out / self.name, self.config)
 
-  def run(self, out: pathlib.Path, make_trainer, progress: bool, log) -> None:
+  def run(self, out: pathlib.Path, progress: bool, log) -> None:
     run_dir = out / self.name
     resume = (run_dir / layout.CONFIG_FILE).is_file()
-    done = loop.train(self.config, run_dir, make_trainer=make_trainer, resume=resume,
-                      progress=progress, log=log)
+    done = assemble.train(self.config, run_dir, resume=resume, progress=progress, log=log)
     self.label(out)
     record.write(run_dir, done["trainer"], done["state"])
 
-  def settle(self, out: pathlib.Path, make_trainer, log) -> None:
+  def settle(self, out: pathlib.Path, log) -> None:
     """Complete what a finished run lacks of its record: its experiment.json (a run of the
     same config that `discosyn train` made in this folder), the files a run finished before
     records were written lacks (from its final checkpoint)."""
@@ -155,7 +155,7 @@ class Train:
       self.label(out)
     if not record.complete(run_dir, record.saved_config(run_dir)):
       log(f"[{self.name}] its record, from its final checkpoint")
-      record.write(run_dir, *loop.load_trained(run_dir / layout.FINAL, make_trainer))
+      record.write(run_dir, *assemble.load(run_dir / layout.FINAL))
 
   def label(self, out: pathlib.Path) -> None:
     """Write the run's experiment.json: what `discosyn report` reads of it."""
@@ -179,8 +179,8 @@ class Fit:
   def done(self, out: pathlib.Path) -> bool:
     return (out / self.name / record.FIT_FILE).is_file()
 
-  def run(self, out: pathlib.Path, make_trainer, progress: bool, log) -> None:
-    trainer, state = loop.load_trained(out / self.source, make_trainer)
+  def run(self, out: pathlib.Path, progress: bool, log) -> None:
+    trainer, state = assemble.load(out / self.source)
     config = trainer.config
     key = jax.random.PRNGKey(config.seed + 2)
     rollouts = evaluation.rollouts(trainer, state.params, state.normalizers, key, self.episodes)
@@ -231,7 +231,7 @@ class Match:
   def done(self, out: pathlib.Path) -> bool:
     return (out / self.name / self.FILE).is_file()
 
-  def run(self, out: pathlib.Path, make_trainer, progress: bool, log) -> None:
+  def run(self, out: pathlib.Path, progress: bool, log) -> None:
     from discosyn_jax.agent import networks
 
     config = record.saved_config(out / self.source)
@@ -442,7 +442,7 @@ def select(steps: list, methods) -> list:
 
 
 def run(experiment: str, out: pathlib.Path, scale: str, seeds=None, *,
-        make_trainer: Callable[[TrainConfig], Any] | None = None, task_sets=None,
+        task_sets=None,
         decoder_from=None, methods=None, hand: str = hands.DEFAULT, progress: bool = False,
         log=print) -> list[pathlib.Path]:
   """Run (or continue) one experiment for every seed on `hand` (a shipped hand or an MJCF
@@ -453,8 +453,6 @@ def run(experiment: str, out: pathlib.Path, scale: str, seeds=None, *,
   and the steps they need (more seeds of some rows, say)."""
   if decoder_from and experiment not in ("transfer", "sparse"):
     raise ValueError(f"a decoder can be given to transfer and sparse only, not to {experiment}")
-  if make_trainer is None:
-    from discosyn_jax.tasks import trainer as make_trainer
   out = pathlib.Path(out)
   if seeds is None:
     seeds = SCALES[scale].seeds if scale in SCALES else (0,)
@@ -478,10 +476,10 @@ def run(experiment: str, out: pathlib.Path, scale: str, seeds=None, *,
       elif step.done(out):
         log(f"[{step.name}] done already; kept")
         if isinstance(step, Train):
-          step.settle(out, make_trainer, log)
+          step.settle(out, log)
         continue
       log(f"[{step.name}] {type(step).__name__.lower()}")
-      step.run(out, make_trainer, progress, log)
+      step.run(out, progress, log)
   return folders
 
 

@@ -21,7 +21,6 @@ from __future__ import annotations
 import json
 import pathlib
 import shutil
-from typing import Callable
 
 import numpy as np
 
@@ -97,17 +96,16 @@ def has_z(run_dir: pathlib.Path) -> bool:
   return (run_dir / layout.Z_FILE).is_file() or bool(checkpoints.candidates(run_dir))
 
 
-def z_of(run_dir: pathlib.Path, make_trainer: Callable | None = None) -> dict[str, np.ndarray]:
+def z_of(run_dir: pathlib.Path) -> dict[str, np.ndarray]:
   """The z samples of a run: its z.npz (its final state's), else drawn from its newest
   checkpoint (a run made before records, or by `discosyn train`)."""
   path = pathlib.Path(run_dir) / layout.Z_FILE
   if path.is_file():
     with np.load(path) as data:
       return {task: data[task].astype(np.float32) for task in data.files}
-  from discosyn_jax import tasks
-  from discosyn_jax.training import loop
+  from discosyn_jax.tasks import assemble
 
-  trainer, state = loop.load_trained(run_dir, make_trainer or tasks.trainer)
+  trainer, state = assemble.load(run_dir)
   return z_samples(trainer, state)
 
 

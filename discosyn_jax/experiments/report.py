@@ -470,7 +470,7 @@ def improvement_of(runs: list[Run], task_set: str, x: str, y: str,
 
 # -- figures ----------------------------------------------------------------------
 def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = True,
-          force: bool = False, make_trainer=None, final_k: int = FINAL_K) -> pathlib.Path:
+          force: bool = False, final_k: int = FINAL_K) -> pathlib.Path:
   """Write OUT/REPORT.md and its figures; return the REPORT.md path. A run's final success
   is the mean of its last `final_k` evaluations."""
   if not 0 < threshold <= 1:
@@ -485,7 +485,7 @@ def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = Tr
     raise ValueError(f"{out} already holds a report; pass --force to replace it")
   made = not out.exists()
   try:
-    return _write(runs, fits, paths, out, threshold, with_tsne, make_trainer, final_k, plans)
+    return _write(runs, fits, paths, out, threshold, with_tsne, final_k, plans)
   except BaseException:
     if made:  # a report that fails leaves no folder of half its figures
       shutil.rmtree(out, ignore_errors=True)
@@ -493,7 +493,7 @@ def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = Tr
 
 
 def _write(runs, fits, paths, out: pathlib.Path, threshold: float, with_tsne: bool,
-           make_trainer, final_k: int, plans) -> pathlib.Path:
+           final_k: int, plans) -> pathlib.Path:
   report = out / "REPORT.md"
   old_figures = set(_figures(report.read_text())) if report.exists() else set()
   out.mkdir(parents=True, exist_ok=True)
@@ -582,7 +582,7 @@ def _write(runs, fits, paths, out: pathlib.Path, threshold: float, with_tsne: bo
                key=lambda r: (np.mean([r.final.get(f"{t}/success", 0) for t in r.config.tasks]),
                               -r.seed))
     name = figure_name("tsne", task_set)
-    report_figures.tsne(best, out / name, make_trainer=make_trainer)
+    report_figures.tsne(best, out / name)
     lines += [f"{best.method} (its best-scoring run on {task_set}, `{best.path.name}`):", "",
               f"![t-SNE {task_set}]({name})", ""]
 

@@ -124,7 +124,7 @@ def profiles(scores: dict[str, dict[str, np.ndarray]], path: pathlib.Path, title
   return _save(fig, axes, title, path)
 
 
-def tsne(run: Run, path: pathlib.Path, make_trainer=None) -> pathlib.Path:
+def tsne(run: Run, path: pathlib.Path) -> pathlib.Path:
   """t-SNE of the z the deterministic policy picks on each task (the paper's Fig. 6): the
   run's z samples (record.z_of: its z.npz, else drawn from its checkpoint)."""
   import matplotlib
@@ -135,7 +135,7 @@ def tsne(run: Run, path: pathlib.Path, make_trainer=None) -> pathlib.Path:
 
   from discosyn_jax.experiments import record
 
-  samples = record.z_of(run.path, make_trainer)
+  samples = record.z_of(run.path)
   zs = [samples[task] for task in run.config.tasks]
   labels = [n for n, z in enumerate(zs) for _ in range(len(z))]
   z = np.concatenate(zs)

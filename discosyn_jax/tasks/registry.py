@@ -1,6 +1,7 @@
-"""The task registry: `make(name)` builds a task's environment; `trainer(config)` builds a
-Trainer on the envs of `config.tasks` (the library's Trainer is given its envs: it knows no
-registry). Reached as `tasks.make`, `tasks.trainer`, ... through discosyn_jax/tasks/__init__.py."""
+"""The task registry: `make(name)` builds a task's environment, `make_envs(config)` those of a
+config's tasks. It knows environments only: the Trainer on them is assembled by
+discosyn_jax/tasks/assemble.py. Reached as `tasks.make`, ... through
+discosyn_jax/tasks/__init__.py."""
 
 from __future__ import annotations
 
@@ -10,19 +11,15 @@ import importlib.util
 import pathlib
 from typing import Callable
 
-from discosyn_jax.run import jax_setup  # (discosyn_jax sets XLA flags before jax is imported)
+from brax.envs.base import Env
 
-jax_setup.setup_jax()  # before brax (discosyn_jax/env/hand_env.py) imports MJX
-
-from brax.envs.base import Env  # noqa: E402
-
-from discosyn_jax.config import PHYSICS  # noqa: E402
-from discosyn_jax.env import hands  # noqa: E402
-from discosyn_jax.env.hand_env import HandEnv  # noqa: E402
-from discosyn_jax.env.task import (Task, TaskConfig, TaskError, label,  # noqa: E402, F401
-                                   traceback_frames)
-from discosyn_jax.tasks import dice, planted, screw, valve, valve_goal, weight_pull  # noqa: E402
-from discosyn_jax.tasks.sets import TASK_SETS  # noqa: E402
+from discosyn_jax.config import PHYSICS
+from discosyn_jax.env import hands  # (discosyn_jax.env imports MJX quietly, before brax does)
+from discosyn_jax.env.hand_env import HandEnv
+from discosyn_jax.env.task import Task, TaskConfig, TaskError, label, traceback_frames  # noqa: F401
+from discosyn_jax.run import jax_setup
+from discosyn_jax.tasks import dice, planted, screw, valve, valve_goal, weight_pull
+from discosyn_jax.tasks.sets import TASK_SETS
 
 
 @dataclasses.dataclass(frozen=True)
@@ -105,6 +102,36 @@ def register(name: str, task: type[Task], default_config=None, summary: str = ""
   if missing:
     raise ValueError(f"task {name!r}: {task.__name__} does not define {', '.join(missing)}")
   new = Entry(task, default_config or task.config_class, summary or task.summary, env)
+  if REGISTRY.get(name, new) != new:
+    raise ValueError(f"a task named {name!r} is registered already")
+  REGISTRY[name] = new
+  return name
+
+
+@dataclasses.dataclass(frozen=True)
+class NoSettings:
+  """The config of an environment registered whole (register_env): it has no settings."""
+
+
+@dataclasses.dataclass(frozen=True)
+class _Whole:
+  """The `env` of an Entry registered whole: `make_env()`, whatever backend or hand is asked
+  for (equal for the same `make_env`, so registering it again is a no-op)."""
+  make_env: Callable[[], Env]
+
+  def __call__(self, task, **_) -> Env:
+    return self.make_env()
+
+
+def _as_is(config):
+  return config
+
+
+def register_env(name: str, make_env: Callable[[], Env], summary: str = "") -> str:
+  """Add an environment of one's own under `name`, built by `make_env()` whatever the
+  backend, physics or hand asked for (a pure-JAX env: the tests' toy tasks). Registering the
+  same `make_env` again is a no-op; another under a taken name is refused."""
+  new = Entry(_as_is, NoSettings, summary or f"{name}: an env of one's own", env=_Whole(make_env))
   if REGISTRY.get(name, new) != new:
     raise ValueError(f"a task named {name!r} is registered already")
   REGISTRY[name] = new
@@ -201,6 +228,7 @@ def make(name: str, *, backend: str = "auto", physics: str = "fast", hand: str =
 
   `overrides` replace fields of the task's default config (e.g. frictionloss=0.2).
   """
+  jax_setup.setup_jax()  # once: the compile cache, and what Brax's trainers need of JAX
   config = make_config(name, **{**physics_overrides(name, physics), **overrides})
   try:
     task = entry(name).task(config)
@@ -233,13 +261,6 @@ def make_envs(config) -> list[Env]:
   """The envs of a TrainConfig's tasks, on its backend, physics and hand."""
   return [make(name, backend=config.backend, physics=config.physics, hand=config.hand)
           for name in config.tasks]
-
-
-def trainer(config, **kwargs):
-  """A Trainer of `config` on its tasks' envs; `kwargs` go to Trainer (devices)."""
-  from discosyn_jax.training.trainer import Trainer
-
-  return Trainer(config, make_envs(config), **kwargs)
 
 
 def names() -> tuple[str, ...]:

@@ -1,20 +1,20 @@
 """The host loop: train steps, logs, evaluations and checkpoints, and nothing else.
 
 Everything numerical happens inside the jitted `Trainer.train_step`; between steps this
-loop writes one JSON line of metrics (and TensorBoard scalars, logs.py), evaluates the deterministic policy every
-`eval_every` steps, checkpoints every `checkpoint_every` steps and at the end, where it
-also runs the closing evaluation (`closing_episodes` a task, closing.json) and draws the
-training curves (plots.py).
+loop writes one JSON line of metrics (and TensorBoard scalars, logs.py), evaluates the
+deterministic policy every `eval_every` steps, checkpoints every `checkpoint_every` steps and
+at the end, where it also runs the closing evaluation (`closing_episodes` a task,
+closing.json) and calls its `on_end` hook (the assembler draws the curves there). It is given
+its Trainer (discosyn_jax/tasks/assemble.py builds one from a config); the decoder a run
+starts from is synergies/start.py's, the progress output run/progress.py's.
 """
 
 from __future__ import annotations
 
-import functools
 import json
 import math
 import pathlib
 import shlex
-import sys
 import time
 from typing import Any, Callable
 
@@ -22,14 +22,12 @@ import jax
 
 from discosyn_jax import atomic, checks
 from discosyn_jax import config as config_lib
-from discosyn_jax.agent import networks
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.env.task import label, not_finite
-from discosyn_jax.run import checkpoints, layout, logs, owner, reading, stop
-from discosyn_jax.synergies import fitting, priors
+from discosyn_jax.run import checkpoints, layout, logs, owner, progress as progress_lib, reading, stop
+from discosyn_jax.synergies import priors, start as start_lib
 from discosyn_jax.training import evaluation
 from discosyn_jax.training.trainer import Trainer, TrainState
-from discosyn_jax.viz import plots
 
 
 class TrainingDiverged(RuntimeError):
@@ -44,42 +42,6 @@ class TaskNotFinite(TrainingDiverged):
 class WriteFailed(ValueError):
   """The run could not be written (a full disk, a folder made read-only); its last good
   checkpoint is kept, and the message says where it is."""
-
-
-def starting_decoder(trainer: Trainer) -> dict | None:
-  """The decoder a fresh run starts from (the one place that decides it): its
-  `decoder_from`, a prior's start (priors.py, computed once per trainer), or None (the
-  Trainer's random one)."""
-  config = trainer.config
-  if config.decoder_init in config_lib.PRIORS:
-    return _prior_start(trainer)
-  return fitting.load_decoder(config.decoder_from, config) if config.decoder_from else None
-
-
-@functools.lru_cache(maxsize=2)
-def _prior_start(trainer: Trainer) -> dict | None:
-  config = trainer.config
-  if config.n_synergies >= trainer.action_size:  # W spans every action: nothing to choose
-    return None
-  response, pooling = config_lib.PRIORS[config.decoder_init]
-  prior = priors.basis(trainer.envs, config.n_synergies, response, pooling)
-  return priors.start(networks.random_decoder(config, trainer.action_size), prior)
-
-
-def decoder_reference(trainer: Trainer, state: TrainState, log=print):
-  """The parameters whose decoder a run's movement is measured from: its initial decoder
-  (for a frozen one, the decoder itself). None without a decoder, or when a fine-tuned
-  decoder's source is gone."""
-  config = trainer.config
-  if trainer.decoder_drift is None:
-    return None
-  if config.freeze_decoder:
-    return jax.tree.map(lambda x: x.copy(), state.params)  # train_step donates the state
-  try:
-    return trainer.initial_params(decoder_params=starting_decoder(trainer))
-  except ValueError as e:
-    log(f"no decoder movement in the logs: {e}")
-    return None
 
 
 def restore(trainer: Trainer, checkpoint: pathlib.Path) -> TrainState:
@@ -99,57 +61,43 @@ def resume_latest(trainer: Trainer, run_dir: pathlib.Path,
   return checkpoints.read_newest(run_dir, lambda path: restore(trainer, path), damaged)
 
 
-def load_trained(path: pathlib.Path, make_trainer: Callable[[TrainConfig], Trainer], **changes) -> tuple[Trainer, TrainState]:
-  """The trainer and the restored state of a run (its newest checkpoint that restores) or
-  of a checkpoint; `changes` replace config fields that do not change the state's layout
-  (backend, eval_envs); `make_trainer(config)` builds the trainer (`tasks.trainer`; tests give
-  tiny envs)."""
-  run_dir = reading.find_run_dir(path)
-  config = config_lib.load(run_dir / layout.CONFIG_FILE)
-  trainer = make_trainer(config.replace(**changes).validate())
-  checks.memory(trainer.config, trainer.envs)
-  _, _, state = reading.read_run(path, lambda checkpoint: restore(trainer, checkpoint))
-  return trainer, state
-
-
-def train(config: TrainConfig, run_dir: pathlib.Path, *,
-          make_trainer: Callable[[TrainConfig], Trainer], resume: bool = False,
-          force: bool = False, progress: bool = True, log=print,
-          stop_at: float | None = None,
-          on_eval: Callable[[int, dict], None] | None = None) -> dict[str, Any]:
-  """Run (or continue) a training run in `run_dir`; return the final evaluation
-  ("results"), state, trainer and compile time.
-  `make_trainer(config)` builds the Trainer of the config the run goes on with (its envs
-  and devices: `tasks.trainer` for the registered tasks), once the folder is checked.
+def train(trainer: Trainer, run_dir: pathlib.Path, *, resume: bool = False, force: bool = False,
+          progress: bool = True, log=print, stop_at: float | None = None,
+          on_eval: Callable[[int, dict], None] | None = None,
+          on_end: Callable[[], None] | None = None) -> dict[str, Any]:
+  """Run (or continue) `trainer`'s config in `run_dir`; return the final evaluation
+  ("results"), the closing one, state, trainer and compile time.
   `stop_at`: end the run (final checkpoint and all) at the first evaluation at which every
   task's deterministic success is at least this. `on_eval(step, row)`: called after each
   evaluation with its row of eval.jsonl (env_steps, wall_s, "<task>/success", ...).
+  `on_end()`: called once the run has its final checkpoint and closing evaluation.
 
   Everything that can refuse the run (the config, the folder, the envs, the memory they
   need) is checked before the run directory is made; the run directory is then this
-  process's alone to its end (owner.Writer). Continuing a run restores its newest good
-  checkpoint and cuts its logs back to that step. A new run that ends before its first
-  checkpoint leaves no trace (a run it replaces is back). A write that fails mid-run (a full
-  disk) stops it with WriteFailed, Ctrl-C with KeyboardInterrupt and SIGTERM with
+  process's alone to its end (owner.Writer). The trainer's config must be the one the
+  folder runs (reading.run_config: a resumed run's own). Continuing a run restores its
+  newest good checkpoint and cuts its logs back to that step. A new run that ends before its
+  first checkpoint leaves no trace (a run it replaces is back). A write that fails mid-run
+  (a full disk) stops it with WriteFailed, Ctrl-C with KeyboardInterrupt and SIGTERM with
   stop.Terminated (a KeyboardInterrupt), each naming the last good checkpoint, whoever
   calls this (run/stop.py: handled).
   """
   run_dir = pathlib.Path(run_dir)
   owner.refuse_if_written(run_dir)
-  config = reading.run_config(run_dir, config, resume, force)
-  trainer = make_trainer(config)
+  config = trainer.config
+  _same_config(reading.run_config(run_dir, config, resume, force), config, run_dir)
   checks.memory(config, trainer.envs)
   if config.decoder_init in config_lib.PRIORS:
     priors.check(trainer.envs)
   # Ctrl-C and SIGTERM stop it cleanly, from a script or a notebook as from the command
   with stop.handled(), owner.Writer(run_dir) as writer:
     # again, now that it is ours: another process may have made or replaced a run there
-    config = reading.run_config(run_dir, config, resume, force)
+    _same_config(reading.run_config(run_dir, config, resume, force), config, run_dir)
     if not resume:
       writer.begin(lambda: config_lib.save(config, run_dir / layout.CONFIG_FILE), replace=force)
     at = {"step": 0, "checkpoint": None}  # where the run is: what a failure names
     try:
-      return _train(trainer, run_dir, resume, writer, at, progress, log, stop_at, on_eval)
+      return _run(trainer, run_dir, resume, writer, at, progress, log, stop_at, on_eval, on_end)
     except BaseException as err:
       undone = writer.new and not writer.kept
       replaced = writer.undo() if undone else False
@@ -170,8 +118,15 @@ def train(config: TrainConfig, run_dir: pathlib.Path, *,
       raise
 
 
-def _train(trainer: Trainer, run_dir: pathlib.Path, resume: bool, writer: owner.Writer,
-           at: dict, progress: bool, log, stop_at: float | None, on_eval=None) -> dict[str, Any]:
+def _same_config(wanted: TrainConfig, given: TrainConfig, run_dir: pathlib.Path) -> None:
+  """The trainer must run the config the folder calls for (a resumed run's own)."""
+  if wanted != given:
+    raise ValueError(f"{run_dir}: the trainer's config is not the run's "
+                     f"({'; '.join(config_lib.mismatches(wanted, given)) or 'steps or logging differ'})")
+
+
+def _run(trainer: Trainer, run_dir: pathlib.Path, resume: bool, writer: owner.Writer,
+         at: dict, progress: bool, log, stop_at: float | None, on_eval, on_end) -> dict[str, Any]:
   """The run itself, in a folder that is ours; `at` follows its step and last good
   checkpoint."""
   config = trainer.config
@@ -189,8 +144,8 @@ def _train(trainer: Trainer, run_dir: pathlib.Path, resume: bool, writer: owner.
     writer.keep()
 
   start_step = int(state.step)
-  reference = decoder_reference(trainer, state, log)
-  bar = _progress(progress, start_step, config.steps)
+  reference = start_lib.decoder_reference(trainer, state, log)
+  bar = progress_lib.bar(progress, start_step, config.steps)
   shown = {}  # training success per task, as of the last rollout in which episodes ended
   step = start_step
   results, evaluated_at = None, None  # the newest evaluation, and its step
@@ -247,11 +202,11 @@ def _train(trainer: Trainer, run_dir: pathlib.Path, resume: bool, writer: owner.
         _log_eval((eval_file, board, on_eval), results, step, config, time.perf_counter() - start)
     save(final=True)
     closing = write_closing(trainer, state, run_dir)
-    curves = plots.run_curves(run_dir, run_dir / layout.PLOTS_DIR)
+    if on_end is not None:
+      on_end()
   finally:
     if bar is not None:
       bar.close()
-  log(f"training curves: {', '.join(str(p) for p in curves)}")
   log(evaluation.format_table(results, step, config))
   if closing is not None:
     log(evaluation.format_table(closing, step, config, config.closing_episodes, "closing "))
@@ -285,7 +240,7 @@ def _start(trainer: Trainer, run_dir: pathlib.Path, resume: bool, log):
       return checkpoint, state
     log(f"{run_dir} holds no good checkpoint: starting from step 0")
   start = time.perf_counter()
-  decoder = starting_decoder(trainer)
+  decoder = start_lib.starting_decoder(trainer)
   if trainer.config.decoder_init in config_lib.PRIORS:
     log(f"the decoder starts in the {trainer.config.decoder_init} prior's subspace (made in "
         f"{time.perf_counter() - start:.0f} s)")
@@ -336,38 +291,3 @@ def _log_eval(outputs, results, step, config, wall_s):
   board.write(row, "eval")
   if callback is not None:
     callback(step, dict(row))
-
-
-def _progress(enabled: bool, start: int, total: int):
-  """A tqdm bar on a terminal; elsewhere (a log file, a notebook's captured stderr) one
-  line every tenth of the run, since a bar's carriage returns would flood the log."""
-  if not enabled:
-    return None
-  if not sys.stderr.isatty():
-    return _ProgressLines(start, total, every=max(1, total // 10))
-  from tqdm import tqdm
-
-  return tqdm(total=total, initial=start, unit="step", dynamic_ncols=True)
-
-
-class _ProgressLines:
-  """The part of tqdm's interface the loop uses, as plain lines on stderr."""
-
-  def __init__(self, start: int, total: int, every: int):
-    self.n, self.start, self.total, self.every, self.postfix = start, start, total, every, ""
-    self.began = time.perf_counter()
-
-  def update(self, n: int) -> None:
-    self.n += n
-    if self.n % self.every == 0 or self.n == self.total:
-      rate = (self.n - self.start) / (time.perf_counter() - self.began)
-      print(f"step {self.n}/{self.total}, {rate:.2f} steps/s {self.postfix}".rstrip(),
-            file=sys.stderr, flush=True)
-
-  def set_postfix_str(self, text: str, refresh: bool = True) -> None:
-    del refresh  # a line is written by update() only
-    self.postfix = text
-
-  def close(self) -> None:
-    pass
-

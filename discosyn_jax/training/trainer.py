@@ -71,8 +71,8 @@ class Trainer:
     self.obs_sizes = tuple(env.observation_size for env in self.envs)
     self.model = networks.build(config, self.obs_sizes, self.action_size)
     self.optimizer = ppo.optimizer(config)
-    self._train = [wrappers.for_training(env, config.reset_pool) for env in self.envs]
-    self.eval_envs = [wrappers.for_evaluation(env) for env in self.envs]  # evaluate.py
+    self.train_envs = [wrappers.for_training(env, config.reset_pool) for env in self.envs]
+    self.eval_envs = [wrappers.for_evaluation(env) for env in self.envs]  # evaluation.py
     self._fresh_state = jax.jit(self._initial_state)
     self._fresh_params = jax.jit(self._init_params)
     # the span the tasks plant, if they do (discosyn_jax/tasks/planted.py): what the decoder should find
@@ -116,7 +116,7 @@ class Trainer:
     if decoder_params is not None:
       params = _with_decoder(params, decoder_params)
     envs = tuple(env.reset(jax.random.split(k, self.config.num_envs))
-                 for env, k in zip(self._train, env_keys))
+                 for env, k in zip(self.train_envs, env_keys))
     norms = tuple(running_statistics.init_state(jnp.zeros((s,))) for s in self.obs_sizes)
     # every leaf an array of the dtype train_step returns: one compiled signature, one
     # checkpoint layout
@@ -159,7 +159,7 @@ class Trainer:
 
   def _unroll(self, params, norm, env_state, key, task: int, rho=None):
     """`unroll_length` steps of every env: under shard_map, each device its own envs."""
-    env = self._train[task]
+    env = self.train_envs[task]
     keys = jax.random.split(key, self.config.unroll_length)
     noise = jax.vmap(lambda k: self._noise(k, self.config.num_envs))(keys)  # (T, B, ...)
     envs, time_envs = P(devices_lib.AXIS), P(None, devices_lib.AXIS)

@@ -1,0 +1,58 @@
+"""The one place that assembles a run from a config: the envs of its tasks (registry.py) and
+the Trainer on them, trained in a run folder by the host loop (training/loop.py), or a run's
+trained state restored. The public API (`ds.train`, `ds.evaluate`), the command line and the
+experiments all go through here; the library below takes a Trainer and knows no registry.
+
+A test or a study with environments of its own registers them (`registry.register_env`)
+and then goes through here too.
+"""
+
+from __future__ import annotations
+
+import pathlib
+from typing import Any, Callable
+
+from discosyn_jax import checks
+from discosyn_jax import config as config_lib
+from discosyn_jax.config import TrainConfig
+from discosyn_jax.run import checkpoints, layout, owner, reading
+from discosyn_jax.tasks import registry
+from discosyn_jax.training import loop
+from discosyn_jax.training.trainer import Trainer, TrainState
+from discosyn_jax.viz import plots
+
+
+def trainer(config: TrainConfig, **kwargs) -> Trainer:
+  """A Trainer of `config` on its tasks' envs; `kwargs` go to Trainer (devices)."""
+  return Trainer(config, registry.make_envs(config), **kwargs)
+
+
+def train(config: TrainConfig, run_dir, *, resume: bool = False, force: bool = False,
+          progress: bool = True, log=print, stop_at: float | None = None,
+          on_eval: Callable[[int, dict], None] | None = None, **trainer_kwargs) -> dict[str, Any]:
+  """Train (or continue) `config` in `run_dir` (loop.train says what the loop does and what
+  it refuses); the training curves are drawn into RUN/plots at the end. `trainer_kwargs` go
+  to the Trainer (devices). Returns the loop's {"results", "closing", "state", "trainer",
+  "compile_s"}."""
+  run_dir = pathlib.Path(run_dir)
+  owner.refuse_if_written(run_dir)
+  config = reading.run_config(run_dir, config, resume, force)  # the run's own, when resuming
+  built = trainer(config, **trainer_kwargs)
+
+  def curves() -> None:
+    log(f"training curves: {', '.join(map(str, plots.run_curves(run_dir, run_dir / layout.PLOTS_DIR)))}")
+
+  return loop.train(built, run_dir, resume=resume, force=force, progress=progress, log=log,
+                    stop_at=stop_at, on_eval=on_eval, on_end=curves)
+
+
+def load(path, **changes) -> tuple[Trainer, TrainState]:
+  """The trainer and the restored state of a run (its newest checkpoint that restores) or of
+  one checkpoint; `changes` replace config fields that do not change the state's layout
+  (backend, eval_envs)."""
+  run_dir = reading.find_run_dir(pathlib.Path(path))
+  config = config_lib.load(run_dir / layout.CONFIG_FILE)
+  built = trainer(config.replace(**changes).validate())
+  checks.memory(built.config, built.envs)
+  _, _, state = reading.read_run(path, lambda checkpoint: checkpoints.restore(checkpoint, built.init()))
+  return built, state
