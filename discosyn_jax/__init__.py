@@ -64,7 +64,7 @@ _API = {
     "train": ("discosyn_jax.api", "train"),
     "evaluate": ("discosyn_jax.api", "evaluate"),
     "read_run": ("discosyn_jax.api", "read_run"),
-    "Run": ("discosyn_jax.api", "Run"),
+    "Run": ("discosyn_jax.run.folder", "Run"),
     "Synergies": ("discosyn_jax.synergies.artefact", "Synergies"),
     # not ds.synergies: that is the subpackage discosyn_jax.synergies once it is imported
     "shipped_synergies": ("discosyn_jax.synergies.artefact", "shipped"),

@@ -4,7 +4,6 @@ the command line is built on the same parts."""
 
 from __future__ import annotations
 
-import dataclasses
 import pathlib
 from typing import Any, Callable
 
@@ -51,51 +50,10 @@ def evaluate(run: str | pathlib.Path, *, episodes: int | None = None,
   return evaluation.evaluate(trainer, state)
 
 
-@dataclasses.dataclass(frozen=True)
-class Run:
-  """A run folder as read: its config, its evaluations (eval.jsonl rows, env_steps and
-  "<task>/success" ...) and its training metrics (metrics.jsonl, or the record's .xz)."""
-  path: pathlib.Path
-  config: TrainConfig
-  evaluations: list[dict[str, Any]]
-  metrics: list[dict[str, Any]]
+def read_run(path: str | pathlib.Path):
+  """A run folder, or a run's record kept without checkpoints (docs/results/...), as a Run
+  (discosyn_jax/run/folder.py: config, evaluations, metrics, closing, labels, finished;
+  success, at_end(k), mean_success, curve, action_shares)."""
+  from discosyn_jax.run import folder
 
-  @property
-  def success(self) -> dict[str, float]:
-    """Each task's deterministic success at the last evaluation."""
-    last = self.evaluations[-1] if self.evaluations else {}
-    return {task: last[f"{task}/success"] for task in self.config.tasks if f"{task}/success" in last}
-
-  @property
-  def mean_success(self) -> float:
-    """The mean over the tasks and the evaluations: the area under the success curve."""
-    rows = [row[f"{task}/success"] for row in self.evaluations for task in self.config.tasks
-            if f"{task}/success" in row]
-    return sum(rows) / len(rows) if rows else float("nan")
-
-  @property
-  def curve(self) -> dict[str, float]:
-    """Each task's success averaged over the evaluations: its area under the curve."""
-    return {task: sum(values) / len(values) for task in self.config.tasks
-            if (values := [row[f"{task}/success"] for row in self.evaluations
-                           if f"{task}/success" in row])}
-
-  def action_shares(self, last: int = 10) -> dict[str, tuple[float, float]]:
-    """Each task's mean |D(z)| and mean rho |r| per actuator over the `last` logged train
-    steps, as the report's residual table reads them: how much of the action the synergies
-    and the residual carry ({} for a run without a residual)."""
-    rows = [row for row in self.metrics if "residual/rho" in row][-last:]
-    mean = lambda key: sum(row[key] for row in rows) / len(rows)
-    return {task: (mean(f"{task}/action_synergy"), mean(f"{task}/action_residual"))
-            for task in self.config.tasks if rows and f"{task}/action_residual" in rows[-1]}
-
-
-def read_run(path: str | pathlib.Path) -> Run:
-  """A run folder, or a run's record kept without checkpoints (docs/results/...), as a Run."""
-  from discosyn_jax import config as config_lib
-  from discosyn_jax.run import layout, logs, reading
-
-  run_dir = reading.find_run_dir(pathlib.Path(path))
-  return Run(path=run_dir, config=config_lib.load(run_dir / layout.CONFIG_FILE),
-             evaluations=logs.read_log(run_dir / layout.EVAL_FILE),
-             metrics=logs.read_log(run_dir / layout.METRICS_FILE))
+  return folder.read(path)

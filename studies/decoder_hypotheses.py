@@ -25,8 +25,8 @@ from discosyn_jax.run import jax_setup  # noqa: E402
 jax_setup.setup_jax()  # the compile cache; MJX imported quietly
 
 from discosyn_jax import config as config_lib  # noqa: E402
-from discosyn_jax.run import layout, logs, reading
-from discosyn_jax.experiments import presets  # noqa: E402
+from discosyn_jax.run import layout, logs
+from discosyn_jax.experiments import presets, record  # noqa: E402
 
 # variant -> TrainConfig changes to set1-disco3-linear (one hypothesis each)
 VARIANTS = {
@@ -84,7 +84,7 @@ def main(argv=None):
       config = base.replace(seed=seed, steps=args.steps, eval_every=args.eval_every,
                             checkpoint_every=args.eval_every, **VARIANTS[variant]).validate()
       run = out / f"{variant}-seed{seed}"
-      if not reading.finished(run, config):
+      if not record.finished(run, config):
         discosyn_jax.train(config, run, resume=(run / layout.CONFIG_FILE).is_file(), progress=False)
   print(summary(out))
 

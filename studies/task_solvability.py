@@ -26,8 +26,8 @@ from discosyn_jax.run import jax_setup  # noqa: E402
 jax_setup.setup_jax()  # the compile cache; MJX imported quietly
 
 from discosyn_jax import config as config_lib  # noqa: E402
-from discosyn_jax.run import layout, logs, reading
-from discosyn_jax.experiments import presets  # noqa: E402
+from discosyn_jax.run import layout, logs
+from discosyn_jax.experiments import presets, record  # noqa: E402
 
 TARGET = 0.8  # deterministic success that counts as learnt
 MAX_ENV_STEPS = 10_000_000
@@ -80,7 +80,7 @@ def main(argv=None):
     for seed in args.seeds:
       config = config_for(task, seed, args.eval_every)
       run = out / f"{task}-seed{seed}"
-      if not reading.finished(run, config):
+      if not record.finished(run, config):
         discosyn_jax.train(config, run, resume=(run / layout.CONFIG_FILE).is_file(),
                            progress=False, stop_at=TARGET)
   print(summary(out))

@@ -84,6 +84,13 @@ def test_train_evaluate_and_read_a_run_through_the_api(tmp_path):
   assert run.success == {"planted0": seen[-1][1]["planted0/success"]}
   assert run.mean_success == pytest.approx(sum(r["planted0/success"] for _, r in seen) / 2)
   assert len(run.metrics) == 4
+  assert run.finished and run.closing["step"] == 4 and run.labels == {}
+  # the report reads the same Run, its labels added: the same figures, computed once
+  from discosyn_jax.experiments import report_runs
+
+  reported = report_runs.load_run(tmp_path / "run")
+  assert isinstance(reported, ds.Run) and reported.metrics == run.metrics
+  assert reported.final == run.at_end(3) and reported.curve == run.curve
 
   again = ds.evaluate(tmp_path / "run")  # the deterministic policy, the same episodes
   assert again == done["results"]

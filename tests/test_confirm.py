@@ -11,7 +11,7 @@ from discosyn import cli
 from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.experiments import confirm, paper, presets, report, report_runs
-from discosyn_jax.run import layout
+from discosyn_jax.run import folder, layout
 from discosyn_jax.synergies import fitting
 from discosyn_jax.training import loop
 from discosyn_jax.training.trainer import Trainer
@@ -46,13 +46,14 @@ def fake_run(folder, config, successes, closing=None, meta=None):
 # -- the final: the mean of the last k evaluations; the closing evaluation -------------------
 def test_the_final_is_the_mean_of_the_last_k_evaluations(tmp_path):
   evals = [{"step": s, "a/success": v, "a/return": 10 * v} for s, v in ((1, 0.0), (2, 0.5), (3, 0.25), (4, 1.0))]
-  assert report_runs.final_of(evals, 1) == evals[-1]
-  three = report_runs.final_of(evals, 3)
+  at_end = lambda rows, k: folder.Run(tmp_path, TOY, rows, []).at_end(k)
+  assert at_end(evals, 1) == evals[-1]
+  three = at_end(evals, 3)
   assert three["a/success"] == pytest.approx((0.5 + 0.25 + 1.0) / 3)
   assert three["a/return"] == pytest.approx(10 * (0.5 + 0.25 + 1.0) / 3)
   assert three["step"] == 4  # the newest row's own step
-  assert report_runs.final_of(evals[:2], 3)["a/success"] == 0.25  # a run with fewer: all it has
-  assert report_runs.final_of([], 3) == {}
+  assert at_end(evals[:2], 3)["a/success"] == 0.25  # a run with fewer: all it has
+  assert at_end([], 3) == {}
   # through the report: the solved table's cell and the run's final, k from the flag
   config = TOY.replace(steps=4).validate()
   fake_run(tmp_path / "runs" / "r", config, [{"a": v, "b": 1.0} for v in (0.0, 0.5, 0.25, 1.0)])
@@ -182,7 +183,7 @@ def planted_runs(tmp_path, x_scores, y_scores):
       rows = [{"step": i + 1, **{f"{t}/success": v for t, v in e.items()}} for i, e in enumerate(evals)]
       runs.append(report_runs.Run(path=tmp_path / f"{row}-seed{seed}", config=TrainConfig(),
                                   experiment="confirm-tiny", method=row, task_set="s", seed=seed,
-                                  evals=rows, finished=True, scale=None,
+                                  evaluations=rows, metrics=[], finished=True, scale=None,
                                   closing={f"{t}/success": v for t, v in evals[-1].items()}))
   return runs
 

@@ -113,10 +113,10 @@ def test_training_solves_the_tiny_task(decoder):
     trainer = two_task_trainer(decoder=decoder)
   state = trainer.init()
   key = jax.random.PRNGKey(1)
-  before = trainer.evaluate(state.params, state.normalizers, key)
+  before = trainer.returns(state.params, state.normalizers, key)
   for _ in range(150):
     state, metrics = trainer.train_step(state)
-  after = trainer.evaluate(state.params, state.normalizers, key)
+  after = trainer.returns(state.params, state.normalizers, key)
   for task in trainer.config.tasks:
     assert float(before[task]["return"]) < 8.0
     assert float(after[task]["return"]) >= 9.5, (task, after)
@@ -170,7 +170,7 @@ def test_task_postures_reach_what_one_frozen_synergy_cannot(posture):
   state = trainer.init()
   for _ in range(150):
     state, _ = trainer.train_step(state)
-  after = trainer.evaluate(state.params, state.normalizers, jax.random.PRNGKey(1))
+  after = trainer.returns(state.params, state.normalizers, jax.random.PRNGKey(1))
   for task in trainer.config.tasks:
     assert (float(after[task]["return"]) >= 9.5) == posture, (task, after)
 

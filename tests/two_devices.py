@@ -26,7 +26,7 @@ def params_after(trainer: Trainer, steps: int, evaluate: bool = False):
     state, metrics = step(state)
   results = None
   if evaluate:  # not split: the callbacks of the evaluation run on one device
-    results = trainer.evaluate(state.params, state.normalizers, jax.random.PRNGKey(1))
+    results = trainer.returns(state.params, state.normalizers, jax.random.PRNGKey(1))
   return jax.device_get(state.params), float(metrics["loss"]), jax.device_get(results)
 
 

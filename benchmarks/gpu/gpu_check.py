@@ -177,7 +177,7 @@ def start_method(log: Log, method: str, config, evaluations: bool = True):
   evaluate = None
   if evaluations:
     key = jax.random.PRNGKey(0)
-    evaluate = phase("eval_compile", lambda: trainer.evaluate.lower(
+    evaluate = phase("eval_compile", lambda: trainer.returns.lower(
         state.params, state.normalizers, key).compile())
   log("start", method=method, backend=bench.backend_label(trainer.envs[0]),
       num_envs=config.num_envs, env_steps_per_train_step=config.env_steps_per_train_step,

@@ -252,17 +252,15 @@ def judge(p: intervals.Estimate, margin: float) -> str:
 
 def scores(runs, tasks_, score: str, final_k: int) -> np.ndarray | None:
   """A runs x tasks matrix of one score of finished runs (None for none)."""
-  from discosyn_jax.experiments.report_runs import final_of
-
   rows = []
   for run in runs:
     if score == "closing":
       row = run.closing or {}
     elif score == "final":
-      row = final_of(run.evals, final_k)
+      row = run.at_end(final_k)
     else:
-      row = {f"{t}/success": float(np.mean([e[f"{t}/success"] for e in run.evals]))
-             for t in tasks_ if all(f"{t}/success" in e for e in run.evals)}
+      row = {f"{t}/success": float(np.mean([e[f"{t}/success"] for e in run.evaluations]))
+             for t in tasks_ if all(f"{t}/success" in e for e in run.evaluations)}
     if all(f"{t}/success" in row for t in tasks_):
       rows.append([row[f"{t}/success"] for t in tasks_])
   return np.array(rows) if rows else None
@@ -272,7 +270,7 @@ def verdicts(plan: Plan, runs) -> list[Verdict]:
   """Each hypothesis of `plan` judged on `runs` (report_runs.Run, those of its folder)."""
   def of(row: Row):
     names = {row.folder(seed) for seed in row.seeds}
-    return [r for r in runs if r.path.name in names and r.finished and r.evals]
+    return [r for r in runs if r.path.name in names and r.finished and r.evaluations]
 
   everything = all(len(of(row)) == len(row.seeds) for row in plan.rows)
   out = []

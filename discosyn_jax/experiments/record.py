@@ -26,7 +26,7 @@ import numpy as np
 
 from discosyn_jax import atomic, config as config_lib
 from discosyn_jax.config import TrainConfig
-from discosyn_jax.run import layout, logs
+from discosyn_jax.run import folder, layout, logs
 
 FIT_FILE = "explained_variance.json"  # in a folder of synergy files: what the fits explain
 ACTIONS_FILE = "actions.npz"  # a fit's training data: not part of its record
@@ -134,8 +134,7 @@ def complete(run_dir: pathlib.Path, config: TrainConfig) -> bool:
   run_dir = pathlib.Path(run_dir)
   if not all((run_dir / name).is_file() for name in files(config)):
     return False
-  evals = logs.read_log(run_dir / layout.EVAL_FILE)
-  return bool(evals) and evals[-1]["step"] >= config.steps
+  return folder.finished(run_dir, config, logs.read_log(run_dir / layout.EVAL_FILE))
 
 
 def finished(run_dir: pathlib.Path, config: TrainConfig) -> bool:

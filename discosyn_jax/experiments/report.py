@@ -85,7 +85,7 @@ def _mean_success(run: Run, task_names, over_curve: bool) -> float | None:
   """A run's success averaged over `task_names`, at its end (the mean of its last k
   evaluations, Run.final) or averaged over all its evaluations (the mean over the curve);
   None where one is missing."""
-  rows = run.evals if over_curve else [run.final] if run.evals else []
+  rows = run.evaluations if over_curve else [run.final] if run.evaluations else []
   values = [row.get(f"{t}/success") for row in rows for t in task_names]
   return float(np.mean(values)) if values and None not in values else None
 
@@ -274,7 +274,7 @@ def first_reward(run: Run, task: str) -> int | None:
 def steps_to(run: Run, task: str, threshold: float) -> int | None:
   """Env steps of the task until the first evaluation at which its success reached
   `threshold`; None when none did."""
-  for row in run.evals:
+  for row in run.evaluations:
     if row.get(f"{task}/success", 0.0) >= threshold:
       return run.per_task_env_steps(row)
   return None
@@ -306,7 +306,7 @@ def frozen_table(group: list[Run], threshold: float, first_rewards: bool) -> str
     for task in dict.fromkeys(t for r in runs for t in r.config.tasks):
       with_task = sorted((r for r in runs if task in r.config.tasks), key=lambda r: r.seed)
       final = _success(with_task, task)
-      curve = np.array([_mean_success(r, [task], over_curve=True) for r in with_task if r.evals])
+      curve = np.array([_mean_success(r, [task], over_curve=True) for r in with_task if r.evaluations])
       cells = [f"{_percent(final)} [{final.size}]", f"{_percent(curve)} [{curve.size}]",
                _steps([steps_to(r, task, threshold) for r in with_task], "not reached")]
       if first_rewards:
@@ -326,7 +326,7 @@ def score_matrices(runs: list[Run], task_names) -> dict[str, dict[str, np.ndarra
   each task (an unfinished run's last evaluation is not its end)."""
   matrices = {kind: {} for kind in SCORES}
   for method in order({r.method for r in runs}):
-    group = sorted((r for r in runs if r.method == method and r.finished and r.evals
+    group = sorted((r for r in runs if r.method == method and r.finished and r.evaluations
                     and all(f"{t}/success" in r.final for t in task_names)), key=lambda r: r.seed)
     if group:
       matrices["final"][method] = np.array([[r.final[f"{t}/success"] for t in task_names]
@@ -573,7 +573,7 @@ def _write(runs, fits, paths, out: pathlib.Path, threshold: float, with_tsne: bo
         lines += [f"![overlap {task_set}]({name})", ""]
 
   # the runs whose z can be read (z.npz, or a checkpoint to draw it from), per set
-  drawable = [r for r in main if with_tsne and r.method.startswith("DiscoSyn") and r.evals
+  drawable = [r for r in main if with_tsne and r.method.startswith("DiscoSyn") and r.evaluations
               and record.has_z(r.path)]
   if drawable:
     lines += ["## t-SNE of the low-dimensional actions", ""]

@@ -24,10 +24,10 @@ def curves(runs: list[Run], path: pathlib.Path, title: str, metric: str = "succe
                            squeeze=False)
   for ax, task in zip(axes[0], task_names):
     for method in order({r.method for r in runs if task in r.config.tasks}):
-      group = [r for r in runs if r.method == method and task in r.config.tasks and r.evals]
+      group = [r for r in runs if r.method == method and task in r.config.tasks and r.evaluations]
       if group:
         _band(ax, method, [[(r.per_task_env_steps(row), row.get(f"{task}/{metric}", np.nan))
-                            for row in r.evals] for r in group])
+                            for row in r.evaluations] for r in group])
     ax.set_title(task)
     ax.set_xlabel("env steps of the task")
     ax.set_ylabel(f"evaluation {metric}")

@@ -15,11 +15,9 @@ import json
 import pathlib
 from typing import Any
 
-import numpy as np
-
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import hands
-from discosyn_jax.run import layout, logs
+from discosyn_jax.run import folder, layout
 from discosyn_jax.experiments import record
 from discosyn_jax.experiments.presets import DECAY, OBJECTS_SUFFIX, REWARDED
 from discosyn_jax import tasks
@@ -42,18 +40,14 @@ MAIN_EXPERIMENTS = ("discosyn", "baselines", "confirm")
 FINAL_K = 3  # evaluations whose mean is a run's final success
 
 
-@dataclasses.dataclass
-class Run:
-  path: pathlib.Path
-  config: TrainConfig
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class Run(folder.Run):
+  """A run as the report reads it (folder.Run), with the labels its tables group it by."""
   experiment: str
   method: str
   task_set: str
   seed: int
-  evals: list[dict[str, Any]]
-  finished: bool
   scale: str | None  # None for a run `discosyn experiment` did not make
-  closing: dict[str, Any] | None = None  # its closing.json; None for a run without one
   final_k: int = FINAL_K
 
   @property
@@ -63,9 +57,8 @@ class Run:
 
   @property
   def final(self) -> dict[str, Any]:
-    """Each task's figures averaged over the last `final_k` evaluations (every key the
-    newest holds; those of fewer rows where the run has fewer)."""
-    return final_of(self.evals, self.final_k)
+    """Each task's figures averaged over the last `final_k` evaluations (folder.Run.final)."""
+    return self.at_end(self.final_k)
 
   def per_task_env_steps(self, row) -> int:
     return row["step"] * self.config.num_envs * self.config.unroll_length
@@ -73,19 +66,6 @@ class Run:
   @property
   def action_size(self) -> int:
     return action_size(self.config.tasks[0], self.config.hand)
-
-
-def final_of(evals: list[dict[str, Any]], k: int) -> dict[str, Any]:
-  """The newest row of `evals` with each task's figures ("<task>/success", ...) averaged
-  over the last `k` rows that hold them (its step, env steps and wall clock its own)."""
-  rows = evals[-k:]
-  if not rows:
-    return {}
-  out = dict(rows[-1])
-  for key in (key for key in rows[-1] if "/" in key):
-    values = [row[key] for row in rows if key in row]
-    out[key] = float(np.mean(values))
-  return out
 
 
 @functools.cache
@@ -101,9 +81,9 @@ def action_size(task: str, hand: str) -> int:
 
 
 def metrics(run: Run) -> list[dict[str, Any]]:
-  """A run's train-step metrics at its record's precision, whether its log or its record is
-  read: the report from a run and from its record (`discosyn keep`) are the same."""
-  return logs.read_log(run.path / layout.METRICS_FILE, as_archived=True)
+  """A run's train-step metrics at its record's precision (folder.Run.metrics): the report
+  from a run and from its record (`discosyn keep`) are the same."""
+  return run.metrics
 
 
 def method_of(config: TrainConfig) -> str:
@@ -135,22 +115,16 @@ def load_run(path: pathlib.Path) -> Run:
   writer = owner.writer_of(path)
   if writer:  # its logs are read as far as they go now
     checkpoints.warn(f"{path} is being written by {writer}: read its logs as they are now")
-  meta_file = path / layout.EXPERIMENT_FILE
-  meta = json.loads(meta_file.read_text()) if meta_file.is_file() else {}
-  evals = logs.read_log(path / layout.EVAL_FILE)
-  closing_file = path / layout.CLOSING_FILE
-  closing = json.loads(closing_file.read_text()) if closing_file.is_file() else None
-  # logs kept without checkpoints (docs/results) are finished when the last step was evaluated
-  finished = (path / layout.FINAL).is_dir() or bool(evals and evals[-1]["step"] >= config.steps)
+  run = folder.read(path, config)
+  meta = run.labels
   # derived from the config only where experiment.json is silent (method_of may read a file)
   task_set = meta["set"] if "set" in meta else set_of(config)
   if config.hand != hands.DEFAULT:  # another hand's runs are never pooled with ours
     task_set = f"{task_set} on {hands.label(config.hand)}"
-  return Run(path=path, config=config, experiment=meta.get("experiment", "train"),
+  fields = {f.name: getattr(run, f.name) for f in dataclasses.fields(folder.Run)}
+  return Run(**{**fields, "path": path}, experiment=meta.get("experiment", "train"),
              method=meta["method"] if "method" in meta else method_of(config),
-             task_set=task_set,
-             seed=meta.get("seed", config.seed), evals=evals, finished=finished,
-             scale=meta.get("scale"), closing=closing)
+             task_set=task_set, seed=meta.get("seed", config.seed), scale=meta.get("scale"))
 
 
 def find(paths, inside: bool = False, final_k: int = FINAL_K) -> tuple[list[Run], list[dict[str, Any]]]:

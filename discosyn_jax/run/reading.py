@@ -68,14 +68,6 @@ def find_run_dir(path: pathlib.Path) -> pathlib.Path:
   raise ValueError(f"{path} is not a run directory or a checkpoint in one")
 
 
-def finished(run_dir: pathlib.Path, config: TrainConfig) -> bool:
-  """Whether `run_dir` holds a finished run (a final checkpoint) of exactly `config`."""
-  run_dir = pathlib.Path(run_dir)
-  saved = run_dir / layout.CONFIG_FILE
-  return ((run_dir / layout.FINAL).is_dir() and saved.is_file()
-          and config_lib.load(saved) == config)
-
-
 def load_run(path: pathlib.Path) -> tuple[TrainConfig, pathlib.Path]:
   """(config, checkpoint) of a run directory (its newest good checkpoint) or a checkpoint
   folder."""

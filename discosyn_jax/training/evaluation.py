@@ -1,7 +1,7 @@
 """The deterministic policy (head mean, decoder mean) on each task: the evaluations a run
 logs, the episodes a video shows, the actions the sequential baselines fit and the t-SNE
 draws. The Trainer jits `episodes` and `returns` once for its envs (`trainer.episodes`,
-`trainer.evaluate`); the rest runs on the host."""
+`trainer.returns`); the rest runs on the host."""
 
 from __future__ import annotations
 
@@ -60,7 +60,7 @@ def evaluate(trainer, state, closing: bool = False) -> dict[str, dict[str, float
     key = jax.random.fold_in(key, CLOSING_KEY)
   at_step = state.step if trainer.model.residual else None
   count = trainer.config.closing_episodes if closing else None
-  out = trainer.evaluate(state.params, state.normalizers, key, at_step=at_step, count=count)
+  out = trainer.returns(state.params, state.normalizers, key, at_step=at_step, count=count)
   return jax.tree.map(float, jax.device_get(out))
 
 

@@ -83,9 +83,9 @@ class Trainer:
                                                     planted=self.planted_span))
                           if self.model.has_discriminator else None)
     self.train_step = jax.jit(self._train_step, donate_argnums=0)
-    # the deterministic policy's evaluation, and its episodes of one task (evaluation.py)
-    self.evaluate = jax.jit(functools.partial(evaluation.returns, self),
-                            static_argnames=("count",))
+    # the deterministic policy's returns and success per task (evaluation.evaluate's jitted
+    # part), and its episodes of one task (evaluation.py)
+    self.returns = jax.jit(functools.partial(evaluation.returns, self), static_argnames=("count",))
     self.episodes = jax.jit(functools.partial(evaluation.episodes, self),
                             static_argnames=("task", "episodes", "keep_states"))
 

@@ -17,7 +17,7 @@ matplotlib.use("Agg")  # files only, no display
 import matplotlib.pyplot as plt  # noqa: E402
 
 from discosyn_jax import config as config_lib  # noqa: E402
-from discosyn_jax.run import layout, logs  # noqa: E402
+from discosyn_jax.run import folder, layout  # noqa: E402
 
 # losses.png panels: one line per task (columns `task/name`), or one shared column
 _PER_TASK = ("policy_loss", "value_loss", "entropy_z")
@@ -25,17 +25,14 @@ _SHARED = ("loss", "entropy_a", "discriminator_loss", "grad_norm")
 
 
 def read_run(run_dir: pathlib.Path) -> tuple[config_lib.TrainConfig, list[dict], list[dict]]:
-  """(config, metrics rows, eval rows) of a run directory."""
+  """(config, metrics rows, eval rows) of a run directory (folder.read)."""
   run_dir = pathlib.Path(run_dir)
-  config_file = run_dir / layout.CONFIG_FILE
-  if not config_file.is_file():
+  if not (run_dir / layout.CONFIG_FILE).is_file():
     raise ValueError(f"{run_dir} holds no run (no config.json)")
-  config = config_lib.load(config_file)
-  metrics = logs.read_log(run_dir / layout.METRICS_FILE)
-  evals = logs.read_log(run_dir / layout.EVAL_FILE)
-  if not metrics:
+  run = folder.read(run_dir)
+  if not run.metrics:
     raise ValueError(f"{run_dir} holds no training steps yet")
-  return config, metrics, evals
+  return run.config, run.metrics, run.evaluations
 
 
 def series(rows: list[dict], column: str) -> tuple[list[float], list[float]]:
