@@ -212,6 +212,9 @@ def test_a_verdict_on_planted_numbers_has_the_known_answer(x, y, verdict, holds,
   # a row one seed short: the verdict is shown, whether it holds is pending
   (found,) = confirm.verdicts(plan, runs[:-1])
   assert found.holds is None and found.runs == (5, 4)
+  # one run a row: no verdict from a bootstrap of one
+  (found,) = confirm.verdicts(plan, [runs[0], runs[5]])
+  assert found.verdict == "too few runs" and found.holds is None and found.runs == (1, 1)
 
 
 def test_interleaved_rows_are_not_separated():

@@ -283,6 +283,10 @@ def verdicts(plan: Plan, runs) -> list[Verdict]:
     if x is None or y is None:
       out.append(Verdict(h, None, counts, "no runs yet", None))
       continue
+    if min(counts) < 2:  # one run a row: a bootstrap of one has no spread to judge by
+      p = intervals.probability_of_improvement({h.score: x}, {h.score: y})[h.score]
+      out.append(Verdict(h, p, counts, "too few runs", None))
+      continue
     p = intervals.probability_of_improvement({h.score: x}, {h.score: y})[h.score]
     found = judge(p, plan.level_margin)
     holds = found in EXPECTATIONS[h.expect] if everything else None
