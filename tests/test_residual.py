@@ -280,7 +280,7 @@ def test_the_report_shows_each_parts_share_of_the_action():
   assert [(r[0].strip("| "), r[2]) for r in rows] == [
       (m, t) for m in ("DiscoSyn3-L-reward-res0.3r150", "Random3-L-zfree-res0.3r150")
       for t in ("valve0", "valve1", "valve2", "valve3")]
-  ends = [[row for row in report_runs.metrics(r) if "residual/rho" in row][-10:]
+  ends = [[row for row in r.metrics if "residual/rho" in row][-10:]
           for r in runs if r.method.startswith("DiscoSyn")]
   share = [np.mean([row["valve2/action_residual"] for row in rows_]) for rows_ in ends]
   assert rows[2][5].startswith(f"{np.mean(share):.2f} ({min(share):.2f}–{max(share):.2f}) [2]")

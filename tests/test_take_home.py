@@ -106,7 +106,7 @@ def test_another_hands_file_a_missing_name_and_a_damaged_file_are_refused_in_one
                      match=r"shadow20-set1.npz drives the shadow20 hand \(20 actuators\), not the "
                            r"env's hand \(leap16\) \(16 actuators\)"):
     ds.synergy_env(leap, "shadow20-set1")
-  with pytest.raises(artefact.SynergyFileError, match="no shipped synergies of that name .*shadow20-set1"):
+  with pytest.raises(artefact.SynergyFileError, match="no shipped synergies have that name .*shadow20-set1"):
     ds.Synergies.load("shadow99-set9")
   (tmp_path / "bad.npz").write_bytes(b"not a zip at all")
   with pytest.raises(artefact.SynergyFileError, match="bad.npz is not a synergy file"):

@@ -259,8 +259,7 @@ def scores(runs, tasks_, score: str, final_k: int) -> np.ndarray | None:
     elif score == "final":
       row = run.at_end(final_k)
     else:
-      row = {f"{t}/success": float(np.mean([e[f"{t}/success"] for e in run.evaluations]))
-             for t in tasks_ if all(f"{t}/success" in e for e in run.evaluations)}
+      row = {f"{t}/success": value for t, value in run.curve.items()}
     if all(f"{t}/success" in row for t in tasks_):
       rows.append([row[f"{t}/success"] for t in tasks_])
   return np.array(rows) if rows else None

@@ -39,7 +39,7 @@ import numpy as np
 
 from discosyn_jax.experiments import confirm, intervals, record, report_figures
 from discosyn_jax.experiments.presets import REWARDED
-from discosyn_jax.experiments.report_runs import FINAL_K, Run, find, metrics, order
+from discosyn_jax.experiments.report_runs import FINAL_K, Run, find, order
 from discosyn_jax import tasks
 from discosyn_jax.tasks import TASK_SETS
 
@@ -167,7 +167,7 @@ def decoder_table(runs: list[Run], last: int = 10) -> str:
   lines = ["| run | env steps | W change | principal cosines | decoder / heads grad norm "
            "| bonus / reward per step |", "|---|---|---|---|---|---|"]
   for run in sorted(runs, key=lambda r: (r.task_set, r.method, r.seed)):
-    rows = [r for r in metrics(run) if "decoder/change" in r][-last:]
+    rows = [r for r in run.metrics if "decoder/change" in r][-last:]
     if not rows:
       continue
     end = rows[-1]
@@ -194,7 +194,7 @@ def residual_table(runs: list[Run], last: int = 10) -> str:
   for task_set in sorted({r.task_set for r in with_residual}):
     for method in order({r.method for r in with_residual if r.task_set == task_set}):
       group = [r for r in with_residual if r.task_set == task_set and r.method == method]
-      ends = [[row for row in metrics(r)
+      ends = [[row for row in r.metrics
                if "residual/rho" in row][-last:] for r in group]
       ends = [rows for rows in ends if rows]
       if not ends:
@@ -248,7 +248,7 @@ def discovery_table(runs: list[Run]) -> str:
 def _last_logged(run: Run) -> dict[str, Any]:
   """The decoder's figures at the last logged train step of a run ({} if none): the
   overlap with its start derived from the cosines for logs older than that metric."""
-  rows = [r for r in metrics(run) if "decoder/change" in r]
+  rows = [r for r in run.metrics if "decoder/change" in r]
   if not rows:
     return {}
   end = dict(rows[-1])
@@ -263,7 +263,7 @@ def first_reward(run: Run, task: str) -> int | None:
   """Env steps of the task until the first non-zero reward of `task` in training, or None
   when none was seen (or the run did not log it)."""
   cfg = run.config
-  for row in metrics(run):
+  for row in run.metrics:
     t = row.get(f"{task}/first_reward_t")
     if t is not None and t < cfg.unroll_length:
       before = row["step"] - 1  # train steps before the one that saw it

@@ -8,7 +8,7 @@ import pathlib
 
 import numpy as np
 
-from discosyn_jax.experiments.report_runs import Run, metrics, order
+from discosyn_jax.experiments.report_runs import Run, order
 
 
 def curves(runs: list[Run], path: pathlib.Path, title: str, metric: str = "success") -> pathlib.Path:
@@ -70,7 +70,7 @@ def overlap_curves(runs: list[Run], path: pathlib.Path, title: str) -> pathlib.P
 
   from discosyn_jax.synergies import diagnostics
 
-  rows = {r.path: [row for row in metrics(r) if "decoder/change" in row]
+  rows = {r.path: [row for row in r.metrics if "decoder/change" in row]
           for r in runs}
   titles = {"decoder/overlap_planted": "with the planted span",
             "decoder/overlap_start": "with its own start"}

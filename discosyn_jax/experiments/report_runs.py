@@ -37,7 +37,7 @@ for _b in (3, 4, 6):
   METHOD_ORDER += tuple(f"{m}{_b}-{k}{c}" for k in ("L", "NL") for m, c in (
       ("DiscoSyn", ""), ("Random", ""), ("Random", "-zfree")) if (k, m) != ("L", "DiscoSyn"))
 MAIN_EXPERIMENTS = ("discosyn", "baselines", "confirm")
-FINAL_K = 3  # evaluations whose mean is a run's final success
+FINAL_K = folder.FINAL_K
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -78,12 +78,6 @@ def action_size(task: str, hand: str) -> int:
   if entry is not None and entry.env is not registry.HandEnv:
     return registry.make(task, hand=hand).action_size
   return len(hands.actuators(hand))
-
-
-def metrics(run: Run) -> list[dict[str, Any]]:
-  """A run's train-step metrics at its record's precision (folder.Run.metrics): the report
-  from a run and from its record (`discosyn keep`) are the same."""
-  return run.metrics
 
 
 def method_of(config: TrainConfig) -> str:

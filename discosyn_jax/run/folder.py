@@ -18,6 +18,8 @@ from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.run import layout, logs, reading
 
+FINAL_K = 3  # evaluations whose mean is a run's final success (the report's, a synergy file's)
+
 
 @dataclasses.dataclass(frozen=True)
 class Run:
@@ -39,9 +41,9 @@ class Run:
     last = self.evaluations[-1] if self.evaluations else {}
     return {task: last[f"{task}/success"] for task in self.config.tasks if f"{task}/success" in last}
 
-  def at_end(self, k: int = 3) -> dict[str, Any]:
+  def at_end(self, k: int = FINAL_K) -> dict[str, Any]:
     """The newest evaluation with each task's figures averaged over the last `k` (its step,
-    env steps and wall clock its own): the report's final success (k = 3)."""
+    env steps and wall clock its own): the report's final success."""
     rows = self.evaluations[-k:]
     if not rows:
       return {}

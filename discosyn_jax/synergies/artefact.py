@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import dataclasses
 import datetime
-import json
 import pathlib
 from typing import Any
 
@@ -30,7 +29,6 @@ import numpy as np
 from discosyn_jax.synergies import fitting
 
 FORMAT = 2
-FINAL_K = 3  # a run's final success: the mean of its last 3 evaluations, as the report's
 
 
 class SynergyFileError(ValueError):
@@ -48,16 +46,6 @@ def shipped() -> dict[str, str]:
   return out
 
 
-def resolve(source: str | pathlib.Path) -> pathlib.Path:
-  """The path of a synergy file, a run folder, or a shipped file's NAME."""
-  path = fitting.resolve(source)
-  if not path.exists():
-    names = ", ".join(sorted(p.stem for p in fitting.SHIPPED.glob("*.npz")))
-    raise SynergyFileError(f"no synergy file or run folder {source}, and no shipped synergies "
-                           f"of that name (shipped: {names})")
-  return path
-
-
 def hand_of(hand_name: str) -> dict[str, Any]:
   """The hand part of a synergy file's meta: name, actuators in action order, ctrlranges."""
   from discosyn_jax.env import hands
@@ -72,33 +60,27 @@ def export(run_dir: str | pathlib.Path, path: str | pathlib.Path,
            date: str | None = None) -> pathlib.Path:
   """Write the synergy file of a finished run (its final decoder, or its record's
   decoder.npz) to `path`, with its hand, what it was learned on and how well."""
-  from discosyn_jax import config as config_lib
-  from discosyn_jax.run import layout, logs, reading
+  from discosyn_jax.run import folder
 
-  run_dir = reading.find_run_dir(pathlib.Path(run_dir))
-  config = config_lib.load(run_dir / layout.CONFIG_FILE)
+  run = folder.read(run_dir)
+  config = run.config
   if config.decoder == "identity":
-    raise SynergyFileError(f"{run_dir} is a full-action run: it has no synergies to export")
-  meta, params = fitting.read(run_dir)
-  evals = logs.read_log(run_dir / layout.EVAL_FILE)
-  if not evals:
-    raise SynergyFileError(f"{run_dir} has no evaluation yet: export a run that has trained")
-  experiment = run_dir / layout.EXPERIMENT_FILE
-  labels = json.loads(experiment.read_text()) if experiment.is_file() else {}
-  last = evals[-FINAL_K:]
-  success = {task: round(float(np.mean([row[f"{task}/success"] for row in last])), 4)
-             for task in config.tasks}
-  closing_file = run_dir / layout.CLOSING_FILE
+    raise SynergyFileError(f"{run.path} is a full-action run: it has no synergies to export")
+  meta, params = fitting.read(run.path)
+  if not run.evaluations:
+    raise SynergyFileError(f"{run.path} has no evaluation yet: export a run that has trained")
+  end = run.at_end()  # the report's final: the mean of the last 3 evaluations
+  success = {task: round(end[f"{task}/success"], 4) for task in config.tasks}
   extra = {}
-  if closing_file.is_file():
-    closing = json.loads(closing_file.read_text())
-    extra["closing"] = {task: closing[f"{task}/success"] for task in config.tasks}
+  if run.closing:
+    extra["closing"] = {task: run.closing[f"{task}/success"] for task in config.tasks}
   return fitting.save(
       path, params, meta, format=FORMAT, decoder_init=meta.get("decoder_init", "random"),
       hand=hand_of(config.hand),
-      learned_on={"tasks": list(config.tasks), "env_steps": evals[-1]["env_steps"],
-                  "seed": config.seed, "method": labels.get("method", fitting.method_name(config)),
-                  "set": labels.get("set")},
+      learned_on={"tasks": list(config.tasks), "env_steps": run.evaluations[-1]["env_steps"],
+                  "seed": config.seed,
+                  "method": run.labels.get("method", fitting.method_name(config)),
+                  "set": run.labels.get("set")},
       success={**success, **extra},
       date=date or datetime.date.today().isoformat(), release=_release())
 
@@ -124,14 +106,11 @@ class Synergies:
 
   @classmethod
   def load(cls, source: str | pathlib.Path) -> "Synergies":
-    path = resolve(source)
     try:
-      meta, params = fitting.read(path)
-    except SynergyFileError:
-      raise
+      meta, params = fitting.read(source)  # a shipped name, a synergy file or a run folder
     except ValueError as err:
       raise SynergyFileError(str(err)) from None
-    return cls(meta, params, path)
+    return cls(meta, params, fitting.resolve(source))
 
   @property
   def name(self) -> str:
