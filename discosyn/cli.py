@@ -30,6 +30,7 @@ def _yes_no(text: str) -> bool:
 
 def build_parser() -> argparse.ArgumentParser:
   from discosyn_jax import config as config_lib
+  from discosyn_jax.env import settings
   from discosyn_jax.experiments import presets  # TrainConfig only, no JAX
 
   parser = _Parser(prog="discosyn", description=__doc__)
@@ -45,8 +46,8 @@ def build_parser() -> argparse.ArgumentParser:
   docs = config_lib.field_docs()  # each field's help, written once beside the field
   choices = {"decoder": config_lib.DECODERS, "decoder_init": config_lib.DECODER_INITS,
              "discriminator_target": config_lib.DISCRIMINATOR_TARGETS,
-             "backend": config_lib.BACKENDS,
-             "physics": config_lib.PHYSICS}
+             "backend": settings.BACKENDS,
+             "physics": settings.PHYSICS}
 
   p = sub.add_parser("train", help="train synergies and policies (a preset, flags replace fields)")
   p.add_argument("--preset", help="a named config of discosyn_jax/experiments/presets.py: "
@@ -78,7 +79,7 @@ def build_parser() -> argparse.ArgumentParser:
   p = sub.add_parser("eval", help="evaluate a run (its latest checkpoint) or one checkpoint")
   p.add_argument("run", help="a run directory or a checkpoint folder in one")
   p.add_argument("--episodes", type=int, help="episodes per task (default: the run's eval_envs)")
-  p.add_argument("--backend", choices=config_lib.BACKENDS,
+  p.add_argument("--backend", choices=settings.BACKENDS,
                  help="physics backend (default: the run's)")
   p.set_defaults(fn=commands.cmd_eval)
 
@@ -206,7 +207,7 @@ def build_parser() -> argparse.ArgumentParser:
 
   p = sub.add_parser("demo", help="build task scenes, step them with random actions, print figures")
   p.add_argument("tasks", nargs="*", default=["set1"], help="tasks or task sets (default: set1)")
-  p.add_argument("--backend", default="auto", choices=config_lib.BACKENDS,
+  p.add_argument("--backend", default="auto", choices=settings.BACKENDS,
                  help="physics backend (default: %(default)s: native on a CPU, mjx on an "
                  "accelerator)")
   p.add_argument("--batch", type=int, default=16, help="parallel envs per task (default: "

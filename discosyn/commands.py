@@ -215,7 +215,10 @@ def cmd_synergies(args) -> None:
     path = pathlib.Path(args.export)
     if path.exists() and not args.force:
       raise UsageError(f"{path} exists; pass --force to replace it")
-    print(artefact.export(args.run, path))
+    from discosyn_jax.experiments import record, report_runs
+
+    run = reading.find_run_dir(args.run)
+    print(artefact.export(run, path, method=str(report_runs.method_of(record.saved_config(run)))))
     return
   run_dir = reading.find_run_dir(args.run)
   trainer, state = assemble.load(args.run, backend="native")  # host physics: pictures only

@@ -17,6 +17,7 @@ import tokenize
 from typing import Any
 
 from discosyn_jax import atomic, checks
+from discosyn_jax.env.settings import PHYSICS  # the env's choice a config names
 
 DECODERS = ("linear", "mlp", "identity")
 # the priors a linear decoder may start from (decoder_init): what the pushed actions are read
@@ -29,14 +30,6 @@ DECODER_INITS = ("auto", "random", *PRIORS)
 # what q(.|a) reads back from an action: the head's z (the paper's), or the activation the
 # decoder read, tanh(z) where z is bounded (the same as z where it is not)
 DISCRIMINATOR_TARGETS = ("z", "activation")
-BACKENDS = ("auto", "native", "mjx")  # auto: native on a CPU, mjx on an accelerator
-CONTROL_DT = 0.04  # s: one control step of every task
-# The physics of the tasks (discosyn_jax/tasks/registry.py, physics_overrides): "reference" is 10 MuJoCo
-# steps of 4 ms per control step for every task, what every run before this field ran;
-# "fast" is each task's cheapest setting that stays faithful to the reference
-# (docs/BENCHMARKS.md, "Physics settings"). A profile never changes once runs use it: a
-# new choice gets a new name.
-PHYSICS = ("fast", "reference")
 
 # Fields that may differ between a run and its resumption: they change how long and how
 # often, never what the state holds.

@@ -1,6 +1,7 @@
 """MuJoCo's MJX imported without the "Failed to import warp" lines it prints on stdout
-wherever the optional Warp packages are absent (the CPU path never needs them). The library's
-parts that reach MJX (env, training: through brax too) import it here first."""
+wherever the optional Warp packages are absent (the CPU path never needs them). Importing
+this module does it: every module of the library that imports brax or MJX imports this one
+first."""
 
 from __future__ import annotations
 
@@ -20,3 +21,6 @@ def import_mjx() -> None:
   for line in captured.getvalue().splitlines():
     if not line.startswith(_NOISE):
       print(line, file=sys.stdout)
+
+
+import_mjx()

@@ -29,7 +29,7 @@ def main(argv=None):
   args = parser.parse_args(argv)
 
   from discosyn_jax.experiments import paper, presets, report_runs
-  from discosyn_jax.synergies import fitting
+  from discosyn_jax.experiments.method import Method
   from studies.residual_transfer import print_table, summary, train_row
 
   base = presets.preset(args.preset)
@@ -44,7 +44,7 @@ def main(argv=None):
   rows = []
   for seed in args.seeds:
     config = base.replace(seed=seed).validate()
-    method = fitting.method_name(config)
+    method = Method.of(config).name
     meta = {"experiment": f"discosyn-{task_set}", "method": method, "set": task_set,
             "seed": seed, "scale": "cpu"}  # a row of its set's table
     run_dir = train_row(args.out, f"{method.lower()}-{task_set}-seed{seed}", config, meta)

@@ -39,13 +39,12 @@ def frozen_meta(source: pathlib.Path, config) -> dict:
   """The frozen run's experiment.json with its method named by this run's residual
   ('DiscoSyn3-L-reward-res0.3r150 frozen-res1r150'), so `discosyn report` shows it as a
   transfer row of its own."""
-  from discosyn_jax.experiments import record
+  from discosyn_jax.experiments.method import Method, Residual
   from discosyn_jax.run import layout
-  from discosyn_jax.synergies import fitting
 
   meta = json.loads((source / layout.EXPERIMENT_FILE).read_text())
-  frozen = fitting.residual_suffix(record.saved_config(source))
-  meta["method"] = meta["method"].removesuffix(frozen) + fitting.residual_suffix(config)
+  method = Method.parse(meta["method"]).replace(frozen_residual=Residual.of(config))
+  meta["method"] = method.name
   return meta
 
 

@@ -11,8 +11,8 @@ from discosyn import cli
 from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.experiments import confirm, paper, presets, report, report_runs
+from discosyn_jax.experiments.method import Method
 from discosyn_jax.run import folder, layout
-from discosyn_jax.synergies import fitting
 from discosyn_jax.training import loop
 from discosyn_jax.training.trainer import Trainer
 from tests.toy_env import ReachAction
@@ -237,7 +237,7 @@ def test_the_schedule_is_a_share_of_the_run_and_means_the_same_at_every_scale(tm
   for steps, start, ramp in ((1200, 400, 200), (300, 100, 50), (600, 200, 100)):
     config = late.replace(steps=steps)
     assert (config.residual_start_step, config.residual_ramp_step_count) == (start, ramp)
-    assert fitting.method_name(config) == f"DiscoSyn6-L-reward-res0.3r{ramp}s{start}"
+    assert Method.of(config).name == f"DiscoSyn6-L-reward-res0.3r{ramp}s{start}"
   # a config of an older release, its schedule in train steps, loads as the same shares
   old = late.replace(steps=1200).to_dict()
   del old["residual_start"], old["residual_ramp"], old["closing_episodes"]

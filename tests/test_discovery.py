@@ -17,6 +17,7 @@ from discosyn_jax.synergies import diagnostics, discovery, fitting
 from discosyn_jax.training.trainer import Trainer
 from discosyn_jax.tasks import assemble
 from discosyn_jax.experiments import paper, presets, report
+from discosyn_jax.experiments.method import Method
 from discosyn_jax.tasks import planted
 from tests import toy_env
 
@@ -129,7 +130,7 @@ def test_the_decoder_weight_decay_shrinks_the_decoder_weights_only():
   moved = [jax.tree_util.keystr(k) for k, v in jax.tree_util.tree_flatten_with_path(updates)[0]
            if np.abs(np.asarray(v)).max() > 0]
   assert moved == ["['params']['synergy_decoder']['synergies']['kernel']"]
-  assert fitting.method_name(config.replace(decoder_weight_decay=3.0)) == "DiscoSyn3-L-wd3"
+  assert Method.of(config.replace(decoder_weight_decay=3.0)).name == "DiscoSyn3-L-wd3"
   # a frozen decoder is not decayed: the optimiser state of a frozen run without decay
   frozen = config.replace(freeze_decoder=True)
   assert jax.tree.structure(ppo.optimizer(frozen).init(params)) == jax.tree.structure(
@@ -220,7 +221,7 @@ def test_an_annealed_decay_falls_linearly_to_nothing_over_its_train_steps():
     shrink.append(float(np.mean(kernel(updates) / kernel(params))) / -config.learning_rate)
   np.testing.assert_allclose(shrink[:12], 2.0 * (1 - np.arange(12) / 12), atol=1e-5)
   assert shrink[12:] == [0.0, 0.0]  # off after its 3 train steps
-  assert fitting.method_name(config) == "DiscoSyn3-L-wd2a3"
+  assert Method.of(config).name == "DiscoSyn3-L-wd2a3"
 
 
 def test_the_decayed_variant_is_planned_beside_the_papers_update_with_its_own_matched_control(tmp_path):

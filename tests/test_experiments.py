@@ -20,6 +20,7 @@ from discosyn_jax.synergies import fitting
 from discosyn_jax.training.trainer import _episode_metrics
 from discosyn_jax.tasks import assemble
 from discosyn_jax.experiments import paper, presets, record, report, report_runs
+from discosyn_jax.experiments.method import Method
 from tests import reference
 from tests import toy_env
 
@@ -198,7 +199,7 @@ def test_the_random_decoder_control_keeps_the_learned_runs_initial_decoder(exper
   # tests/test_discovery.py)
   steps = [s for s in paper.Planner(experiments, "ci", 0, SETS).plan("discosyn-set1")
            if s.meta["method"].endswith(("-L", "-NL"))]
-  names = [s.config and fitting.method_name(s.config) for s in steps]
+  names = [Method.of(s.config).name for s in steps]
   assert names == ["DiscoSyn3-L", "Random3-L", "DiscoSyn3-NL", "Random3-NL", "DiscoSyn4-L",
                    "Random4-L", "DiscoSyn4-NL", "Random4-NL"]
   assert all(s.config.replace(freeze_decoder=False) == r.config
@@ -315,7 +316,7 @@ def test_each_discosyn_row_stands_above_its_controls_todays_default_first():
           "DiscoSyn3-L-objects", "Prior3-L-objects", "DiscoSyn3-L", "Random3-L-matched", "Random3-L",
           "Random3-L-zfree", "DiscoSyn3-NL", "Random3-NL-zfree", "DiscoSyn4-L-reward",
           "DiscoSyn3-L frozen"]
-  assert report_runs.order(set(rows)) == rows
+  assert [m.name for m in report_runs.order(set(map(Method.parse, rows)))] == rows
 
 
 def test_transfer_is_judged_over_the_curve_and_by_the_steps_to_the_threshold(tmp_path):
@@ -403,10 +404,11 @@ def test_all_runs_every_row_of_the_papers_tables_once(tmp_path):
   assert {s.meta["method"] for s in frozen.values()} == {"DiscoSyn3-L-reward frozen",
                                                          "DiscoSyn6-L-reward frozen"}
   assert all(s.config.decoder_init == "random" for s in frozen.values())
-  rows = lambda task_set: {s.meta["method"] for s in steps if s.meta["set"] == task_set
-                           and s.meta["experiment"].split("-")[0] in ("discosyn", "baselines")}
+  rows = lambda task_set: {s.method for s in steps if s.meta["set"] == task_set
+                           and s.meta["experiment"].split("-")[0] in ("discosyn", "baselines")
+                           and isinstance(s, paper.Train)}
   for task_set, paper_rows in paper.PAPER_ROWS.items():
-    assert rows(task_set) - {"fit"} == set(paper_rows)
+    assert rows(task_set) == set(paper_rows)
     # every row of the paper's table is there, DiscoSyn<b>-L from today's default start
     assert set(report.PAPER_SOLVED[task_set]) <= {report.paper_row(m) for m in paper_rows}
   # parts in order: set #1's rows, the sparse valve, transfer, set #2's rows last
@@ -422,7 +424,7 @@ def test_all_runs_every_row_of_the_papers_tables_once(tmp_path):
                          ("transfer-synergies-set2-seed0", "discosyn6-l-reward-set2-seed0")):
     assert by_name[frozen].needs == (source,) and names.index(source) < names.index(frozen)
     assert by_name[frozen].config.decoder_from == str(tmp_path.resolve() / source / "decoder.npz")
-    assert by_name[source].meta["method"] in paper.PAPER_ROWS[by_name[source].meta["set"]]
+    assert by_name[source].method in paper.PAPER_ROWS[by_name[source].meta["set"]]
     # beside it, in its own experiment's folders: the random decoder of the same size with z
     # bounded as the frozen space has it, and with z free
     for kind, squash_z in (("random", True), ("random-zfree", False)):
@@ -500,17 +502,18 @@ def test_a_folder_of_records_continues_and_reports_without_checkpoints(experimen
 def test_methods_run_with_the_runs_they_need(tmp_path):
   plan = lambda name: paper.Planner(tmp_path, "ci", 0, SETS).plan(name)
   names = lambda steps: [s.name for s in steps]
+  select = lambda steps, methods: paper.select(steps, map(Method.parse, methods))
   # a PPO run not yet trained is trained as any step, not "trained again" for its fit
   assert paper._trained_again(plan("baselines-set1"), tmp_path) == set()
-  assert names(paper.select(plan("baselines-set1"), ["PCA4"])) == [
+  assert names(select(plan("baselines-set1"), ["PCA4"])) == [
       "ppo-set1-seed0", "synergies-set1-seed0", "pca4-set1-seed0"]
-  assert names(paper.select(plan("discosyn-set1"), ["Random3-L", "DiscoSyn3-L"])) == [
+  assert names(select(plan("discosyn-set1"), ["Random3-L", "DiscoSyn3-L"])) == [
       "discosyn3-l-set1-seed0", "random3-l-set1-seed0"]
-  assert names(paper.select(plan("sparse"), ["DiscoSyn3-L frozen"])) == [
+  assert names(select(plan("sparse"), ["DiscoSyn3-L frozen"])) == [
       "discosyn3-l-set1-seed0", "sparse-synergies-seed0"]
-  assert names(paper.select(plan("sparse"), ["Random3-L", "PPO"])) == [
+  assert names(select(plan("sparse"), ["Random3-L", "PPO"])) == [
       "sparse-random-seed0", "sparse-ppo-seed0"]
-  zfree = paper.select(plan("sparse"), ["Random3-L-zfree"])  # the control with z free too
+  zfree = select(plan("sparse"), ["Random3-L-zfree"])  # the control with z free too
   assert names(zfree) == ["sparse-random-zfree-seed0"] and not zfree[0].config.squash_z
   # a run of one method is the same run as the whole experiment's (the same folder, config)
   whole = {s.name: s for s in plan("baselines-set1")}

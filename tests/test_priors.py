@@ -10,6 +10,7 @@ from discosyn_jax import config as config_lib
 from discosyn_jax.agent import networks
 from discosyn_jax.synergies import diagnostics, fitting, priors, start
 from discosyn_jax.experiments import presets
+from discosyn_jax.experiments.method import Method
 
 TINY = dict(num_envs=2, unroll_length=4, num_minibatches=2, update_epochs=1, steps=1,
             eval_every=0, eval_envs=2, checkpoint_every=0, backend="native")
@@ -70,13 +71,13 @@ def test_every_seed_of_a_run_starts_in_the_same_subspace_and_only_there():
 
 def test_the_prior_is_refused_where_it_cannot_start_the_decoder():
   config = presets.preset("set1-disco3-linear-objects")
-  assert fitting.method_name(config) == "DiscoSyn3-L-objects"
-  assert fitting.method_name(config.replace(freeze_decoder=True)) == "Prior3-L-objects"
+  assert Method.of(config).name == "DiscoSyn3-L-objects"
+  assert Method.of(config.replace(freeze_decoder=True)).name == "Prior3-L-objects"
   default = presets.preset("set1-disco3-linear")  # the reward prior, every linear preset's start
   assert {presets.preset(f"set{n}-disco{b}-linear").decoder_init
           for n, b in ((1, 3), (1, 4), (2, 4), (2, 6))} == {"reward"}
-  assert fitting.method_name(default) == "DiscoSyn3-L-reward"
-  assert fitting.method_name(default.replace(freeze_decoder=True)) == "Prior3-L-reward"
+  assert Method.of(default).name == "DiscoSyn3-L-reward"
+  assert Method.of(default.replace(freeze_decoder=True)).name == "Prior3-L-reward"
   for bad in (dict(decoder="mlp"), dict(decoder_from="x.npz"), dict(decoder_init="pca")):
     with pytest.raises(ValueError):
       config.replace(**bad).validate()

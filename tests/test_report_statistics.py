@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from discosyn_jax.experiments import intervals, report
+from discosyn_jax.experiments.method import Method
 from tests.report_fixture import FIXTURE
 
 REPS = 500  # enough for the orderings asserted here, and quick
@@ -90,27 +91,27 @@ def test_the_seeds_that_would_separate_a_gap():
 
 
 def test_the_default_row_of_each_set():
+  default = lambda task_set, rows: report.default_method(task_set, list(map(Method.parse, rows)))
   rows = ["PPO", "Random6-L-zfree", "DiscoSyn4-L-reward", "DiscoSyn6-L-reward"]
-  assert report.default_method("set2", rows) == "DiscoSyn6-L-reward"
-  assert report.default_method("set1", ["PPO", "DiscoSyn3-L", "Random3-L-zfree"]) == "DiscoSyn3-L"
-  assert report.default_method("unseen-set1", ["PPO", "DiscoSyn3-L-reward frozen"]) == \
+  assert default("set2", rows).name == "DiscoSyn6-L-reward"
+  assert default("set1", ["PPO", "DiscoSyn3-L", "Random3-L-zfree"]).name == "DiscoSyn3-L"
+  assert default("unseen-set1", ["PPO", "DiscoSyn3-L-reward frozen"]).name == \
       "DiscoSyn3-L-reward frozen"
-  assert report.default_method("Press+Rake", ["Random3-L", "DiscoSyn3-L-reward"]) == \
-      "DiscoSyn3-L-reward"
-  assert report.default_method("set1", ["PPO", "PCA4"]) is None
+  assert default("Press+Rake", ["Random3-L", "DiscoSyn3-L-reward"]).name == "DiscoSyn3-L-reward"
+  assert default("set1", ["PPO", "PCA4"]) is None
 
 
 def test_the_row_with_a_residual_is_measured_against_the_others():
   from types import SimpleNamespace as ns
 
-  res, control = "DiscoSyn3-L-reward-res0.3r150", "Random3-L-zfree-res0.3r150"
-  rows = {"DiscoSyn3-L-reward": 0.0, res: 0.3, control: 0.3, "PPO": 0.0}
+  res, control = Method.parse("DiscoSyn3-L-reward-res0.3r150"), Method.parse("Random3-L-zfree-res0.3r150")
+  rows = {Method.parse("DiscoSyn3-L-reward"): 0.0, res: 0.3, control: 0.3, Method("PPO"): 0.0}
   runs = [ns(method=m, config=ns(residual=rho)) for m, rho in rows.items()]
   assert report.residual_methods(runs, rows) == [res]
   assert report.residual_methods([r for r in runs if r.method != res], rows) == []
 
   x = np.array([[0.5, 1.0], [0.75, 1.0], [1.0, 0.75]])
-  matrices = {kind: {res: x, control: x.copy(), "PPO": x * 0} for kind in report.SCORES}
+  matrices = {kind: {res: x, control: x.copy(), Method("PPO"): x * 0} for kind in report.SCORES}
   table = report.improvement_table(matrices, res)
   lines = table.splitlines()
   assert lines[0] == (f"| method | runs | P({res} > row), final success | "

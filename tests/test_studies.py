@@ -60,3 +60,23 @@ def test_the_residual_schedule_study_refuses_a_preset_without_a_residual(capsys,
   assert stop.value.code == 2
   assert "set2-disco6-linear has no residual" in capsys.readouterr().err
   assert not any(tmp_path.iterdir())  # nothing trained, nothing written
+
+
+def test_the_set2_lag_study_reads_when_a_run_finds_a_task(capsys):
+  """Its 'found' is the first evaluation at 0.8 or above, in the task's env steps, as the
+  record's eval.jsonl has it; PPO's heads get no discriminator bonus."""
+  import json
+
+  folder = ROOT / "docs" / "results" / "confirm-late-residual"
+  lag = study("set2_lag")
+  runs = {r.path.name: r for r in lag.runs([folder])}
+  ppo = runs["set2-ppo-seed3"]
+  rows = [json.loads(line) for line in (ppo.path / "eval.jsonl").read_text().splitlines()]
+  first = next(r for r in rows if r["weight_pull/success"] >= 0.8)
+  config = ppo.config
+  assert lag.found_at(ppo, "weight_pull") == first["step"] * config.num_envs * config.unroll_length
+  summary = lag.summary(ppo, "weight_pull", 500_000)
+  assert summary["bonus"] == 0.0 and summary["h_start"] > 0
+  lag.main([str(folder), "--tasks", "weight_pull"])
+  out = capsys.readouterr().out
+  assert "| PPO | 3 |" in out and "| DiscoSyn6-L-reward | 3 |" in out

@@ -18,7 +18,7 @@ import jax
 import mujoco
 
 from discosyn_jax import checks
-from discosyn_jax.config import CONTROL_DT
+from discosyn_jax.env.settings import CONTROL_DT
 from discosyn_jax.env import hands, scene
 from discosyn_jax.env.physics import PhysicsView
 

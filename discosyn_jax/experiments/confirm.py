@@ -173,7 +173,7 @@ def steps(plan: Plan, out: pathlib.Path) -> list:
       if index < len(row.seeds):
         seed = row.seeds[index]
         config = row.run_config(seed)
-        meta = dict(experiment=f"confirm-{plan.name}", method=report_runs.method_of(config),
+        meta = dict(experiment=f"confirm-{plan.name}", method=str(report_runs.method_of(config)),
                     set=report_runs.set_of(config), seed=seed, scale=f"plan {plan.name}",
                     row=row.name)
         runs.append(paper.Train(row.folder(seed), config, meta))

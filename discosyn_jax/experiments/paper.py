@@ -63,6 +63,7 @@ from discosyn_jax.synergies import fitting
 from discosyn_jax.tasks import assemble
 from discosyn_jax.training import evaluation
 from discosyn_jax.experiments import presets, record
+from discosyn_jax.experiments.method import Method, Residual
 
 # the task sets of discosyn_jax/tasks/sets.py, the unseen tasks split by the set whose synergies they take
 TASK_SETS = {**{name: tasks.TASK_SETS[name] for name in ("set1", "set2", "sparse", "planted",
@@ -88,6 +89,7 @@ PAPER_ROWS = {
              "Random6-L", "Random6-L-zfree", "Prior6-L-reward",
              "PPO", "PCA4", "AE4", "PCA6", "AE6"),
 }
+PAPER_ROWS = {task_set: tuple(map(Method.parse, rows)) for task_set, rows in PAPER_ROWS.items()}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -134,6 +136,10 @@ class Train:
   config: TrainConfig
   meta: dict[str, Any]
   needs: tuple[str, ...] = ()  # the steps whose folders this one reads
+
+  @property
+  def method(self) -> Method:
+    return Method.parse(self.meta["method"])
 
   def done(self, out: pathlib.Path) -> bool:
     """A finished run of this config: its final checkpoint, or its record alone."""
@@ -243,8 +249,9 @@ class Match:
 
 
 # -- plans ---------------------------------------------------------------------
-def _meta(experiment, method, task_set, seed, scale):
-  return dict(experiment=experiment, method=method, set=task_set, seed=seed, scale=scale)
+def _meta(experiment, method: Method | str, task_set, seed, scale):
+  """A step's experiment.json: a run's method by name, "fit" for a fit's folder."""
+  return dict(experiment=experiment, method=str(method), set=task_set, seed=seed, scale=scale)
 
 
 class Planner:
@@ -265,12 +272,12 @@ class Planner:
     return base.replace(tasks=tuple(self.sets[task_set]), seed=self.seed, hand=self.hand,
                         **self.sizes.train_for(task_set), **changes).validate()
 
-  def _folder(self, method: str, task_set: str) -> str:
-    return f"{method.lower()}-{task_set}-{self.tag}"
+  def _folder(self, method: Method | str, task_set: str) -> str:
+    return f"{str(method).lower()}-{task_set}-{self.tag}"
 
   def discosyn(self, task_set: str, b: int, kind: str, variant: str = "") -> Train:
     config = self._config(presets.preset(f"{task_set}-disco{b}-{kind}{variant}"), task_set)
-    method = fitting.method_name(config)
+    method = Method.of(config)
     return Train(self._folder(method, task_set), config,
                  _meta(f"discosyn-{task_set}", method, task_set, self.seed, self.scale))
 
@@ -280,17 +287,16 @@ class Planner:
     starts from, whatever the tasks)."""
     config = learned.config.replace(freeze_decoder=True, decoder_from="", decoder_weight_decay=0.0,
                                     decoder_weight_decay_steps=0, decoder_init="random").validate()
-    method = fitting.method_name(config)
+    method = Method.of(config)
     return Train(self._folder(method, task_set), config,
                  _meta(experiment, method, task_set, self.seed, self.scale))
 
   def zfree(self, random: Train, name: str = "") -> Train:
     """The control `random` with z free (the stronger of the two): the same frozen decoder,
     the heads' z unbounded; in folder `name`, else in its method's."""
-    residual = fitting.residual_suffix(random.config)  # a residual's name stays last
-    method = f"{random.meta['method'].removesuffix(residual)}-zfree{residual}"
+    method = random.method.replace(control="zfree")
     return Train(name or self._folder(method, random.meta["set"]),
-                 random.config.replace(squash_z=False).validate(), {**random.meta, "method": method})
+                 random.config.replace(squash_z=False).validate(), {**random.meta, "method": str(method)})
 
   def controls(self, learned: Train, task_set: str, experiment: str) -> list:
     """A DiscoSyn run's controls (module docstring): Random, Random-zfree where the run
@@ -302,13 +308,11 @@ class Planner:
       steps.append(self.zfree(random))
     if learned.config.decoder_init != "random":  # the prior's start frozen: what learning adds
       prior = random.config.replace(decoder_init=learned.config.decoder_init).validate()
-      method = fitting.method_name(prior)
+      method = Method.of(prior)
       steps.append(Train(self._folder(method, task_set), prior, meta(method)))
     if learned.config.decoder == "linear":
       # named after the learned run it copies: Random3-L-matched, Random3-L-matched-wd8a200
-      update = learned.meta["method"].removeprefix(f"DiscoSyn{learned.config.n_synergies}-L")
-      residual = fitting.residual_suffix(learned.config)  # in `update` already, kept last
-      method = f"{random.meta['method'].removesuffix(residual)}-matched{update}"
+      method = learned.method.replace(family="Random", control="matched")
       match = Match(self._folder(f"{method}-decoder", task_set), learned.name, meta("fit"))
       path = (self.out / match.name / Match.FILE).resolve()
       steps += [match, Train(self._folder(method, task_set),
@@ -348,10 +352,10 @@ class Planner:
     base = presets.preset(f"{source_set}-disco{b}-{kind}{variant}")
     if self.decoder_from:
       meta, _ = fitting.read(self.decoder_from)
-      source, path, method = None, self.decoder_from, fitting.method_name(meta)
+      source, path, method = None, self.decoder_from, Method.of(meta)
     else:
       source = self.discosyn(source_set, b, kind, variant)
-      meta, method = fitting.meta_of(source.config), source.meta["method"]
+      meta, method = fitting.meta_of(source.config), source.method
       path = self.out / source.name / layout.DECODER_FILE  # the record of its run
     changes = fitting.frozen_fields(meta, path)
     if base.residual:
@@ -361,7 +365,7 @@ class Planner:
     config = self._config(base, task_set, **changes)
     # named by its source row and its own residual: "DiscoSyn3-L-reward frozen",
     # "DiscoSyn3-L-reward-res0.3r150 frozen-res0.3r150"
-    method = f"{method} frozen{fitting.residual_suffix(config)}"
+    method = method.replace(frozen=True, frozen_residual=Residual.of(config))
     # folders: transfer-synergies-set1-seed0 (unseen tasks of set #1), sparse-synergies-seed0,
     # transfer-synergies-residual-set1-seed0
     label = task_set.removeprefix("unseen-")
@@ -430,8 +434,8 @@ def select(steps: list, methods) -> list:
   """The steps of these methods (e.g. "DiscoSyn3-L", "PCA4", "DiscoSyn3-L frozen") and the
   steps they read from (a PCA row's PPO run and fit, a frozen space's DiscoSyn run), in plan
   order."""
-  by_name = {s.name: s for s in steps}
-  keep = {s.name for s in steps if s.meta["method"] in methods}
+  by_name, methods = {s.name: s for s in steps}, set(methods)
+  keep = {s.name for s in steps if isinstance(s, Train) and s.method in methods}
   todo = list(keep)
   while todo:
     for need in by_name[todo.pop()].needs:
@@ -459,11 +463,12 @@ def run(experiment: str, out: pathlib.Path, scale: str, seeds=None, *,
   hand = hands.load(hand).name  # a file's absolute path
   plans = [Planner(out, scale, seed, task_sets, decoder_from, hand).plan(experiment) for seed in seeds]
   if methods:
-    known = {s.meta["method"] for s in plans[0]} - {"fit"}
-    unknown = [m for m in methods if m not in known]
+    methods = [Method.parse(m) if isinstance(m, str) else m for m in methods]
+    known = {s.method for s in plans[0] if isinstance(s, Train)}
+    unknown = [m.name for m in methods if m not in known]
     if unknown:
       raise ValueError(f"{experiment} has no method {', '.join(map(repr, unknown))}; its methods: "
-                       f"{', '.join(sorted(known))}")
+                       f"{', '.join(sorted(m.name for m in known))}")
     plans = [select(steps, methods) for steps in plans]
   folders = []
   for steps in plans:

@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 
 from discosyn_jax.experiments import confirm, intervals, record, report_figures
+from discosyn_jax.experiments.method import Method
 from discosyn_jax.experiments.presets import REWARDED
 from discosyn_jax.experiments.report_runs import FINAL_K, Run, find, order
 from discosyn_jax import tasks
@@ -54,10 +55,12 @@ PAPER_SOLVED = {
 PAPER_PCA_VARIANCE = {"set1": {3: 0.415, 4: 0.508, 6: 0.628}}
 
 
-def paper_row(method: str) -> str:
+def paper_row(method: Method) -> str:
   """The paper's row a method stands for: its own name, and for today's default start of a
-  linear DiscoSyn (DiscoSyn3-L-reward) the paper's DiscoSyn3-L."""
-  return method.removesuffix(REWARDED) if method.startswith("DiscoSyn") else method
+  DiscoSyn decoder (DiscoSyn3-L-reward) the paper's DiscoSyn3-L."""
+  if method == Method("DiscoSyn", method.synergies, method.decoder, start="reward"):
+    return method.replace(start="").name
+  return method.name
 
 
 # -- tables ---------------------------------------------------------------------
@@ -336,15 +339,15 @@ def score_matrices(runs: list[Run], task_names) -> dict[str, dict[str, np.ndarra
   return matrices
 
 
-def default_method(task_set: str, methods) -> str | None:
+def default_method(task_set: str, methods) -> Method | None:
   """The row the others are measured against: the set's default DiscoSyn row (for unseen
   tasks and the sparse valve, that row's decoder frozen), else its first DiscoSyn row."""
   from discosyn_jax.experiments import paper
 
   source = paper.TRANSFER_FROM.get(task_set)
   rows = paper.PAPER_ROWS.get(source[0] if source else task_set, ())
-  wanted = [rows[0] + (" frozen" if source else "")] if rows else []
-  found = [m for m in wanted + order(methods) if m in methods and m.startswith("DiscoSyn")]
+  wanted = [rows[0].replace(frozen=bool(source))] if rows else []
+  found = [m for m in wanted + order(methods) if m in methods and m.family == "DiscoSyn"]
   return found[0] if found else None
 
 
@@ -397,7 +400,7 @@ def interval_table(matrices: dict[str, dict[str, np.ndarray]], default: str | No
   lines = ["| " + " | ".join(head) + " |", "|---" * len(head) + "|"]
   of = lambda method: {kind: matrices[kind][method] for kind in SCORES}
   for method in matrices["final"]:
-    cells = [method, str(len(matrices["final"][method]))]
+    cells = [str(method), str(len(matrices["final"][method]))]
     for middle, mean in intervals.aggregates(of(method)).values():
       cells += [_interval(middle), _interval(mean)]
     if default and method == default:
@@ -408,11 +411,11 @@ def interval_table(matrices: dict[str, dict[str, np.ndarray]], default: str | No
   return "\n".join(lines) + "\n"
 
 
-def residual_methods(runs: list[Run], methods) -> list[str]:
+def residual_methods(runs: list[Run], methods) -> list[Method]:
   """The set's learned-synergy rows with a residual (their decoder frozen on unseen tasks and
   the sparse valve), each measured against the others in a table of its own."""
   with_residual = {r.method for r in runs if r.config.residual > 0}
-  return [m for m in order(methods) if m in with_residual and m.startswith("DiscoSyn")]
+  return [m for m in order(methods) if m in with_residual and m.family == "DiscoSyn"]
 
 
 def improvement_table(matrices: dict[str, dict[str, np.ndarray]], x: str) -> str:
@@ -421,17 +424,17 @@ def improvement_table(matrices: dict[str, dict[str, np.ndarray]], x: str) -> str
   lines = ["| " + " | ".join(head) + " |", "|---" * len(head) + "|"]
   for method in matrices["final"]:
     if method != x:
-      lines.append("| " + " | ".join([method, str(len(matrices["final"][method]))]
+      lines.append("| " + " | ".join([str(method), str(len(matrices["final"][method]))]
                                       + _improvement_cells(matrices, x, method)) + " |")
   return "\n".join(lines) + "\n"
 
 
-def profile_rows(matrices: dict[str, dict[str, np.ndarray]], default: str | None,
-                 others: int = 3) -> list[str]:
+def profile_rows(matrices: dict[str, dict[Method, np.ndarray]], default: Method | None,
+                 others: int = 3) -> list[Method]:
   """The rows a profile draws: the default, full-action PPO, and the `others` other rows of
   the highest final IQM (every row of a set would hide the lines)."""
   final = matrices["final"]
-  fixed = [m for m in (default, "PPO") if m in final]
+  fixed = [m for m in (default, Method("PPO")) if m in final]
   rest = sorted((m for m in final if m not in fixed), key=lambda m: -intervals.iqm(final[m]))
   chosen = set(fixed + rest[:others])
   return [m for m in final if m in chosen]
@@ -573,7 +576,7 @@ def _write(runs, fits, paths, out: pathlib.Path, threshold: float, with_tsne: bo
         lines += [f"![overlap {task_set}]({name})", ""]
 
   # the runs whose z can be read (z.npz, or a checkpoint to draw it from), per set
-  drawable = [r for r in main if with_tsne and r.method.startswith("DiscoSyn") and r.evaluations
+  drawable = [r for r in main if with_tsne and r.method.family == "DiscoSyn" and r.evaluations
               and record.has_z(r.path)]
   if drawable:
     lines += ["## t-SNE of the low-dimensional actions", ""]

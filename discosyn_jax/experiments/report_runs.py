@@ -19,23 +19,14 @@ from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import hands
 from discosyn_jax.run import folder, layout
 from discosyn_jax.experiments import record
-from discosyn_jax.experiments.presets import DECAY, OBJECTS_SUFFIX, REWARDED
+from discosyn_jax.experiments.method import Method, Residual
+from discosyn_jax.experiments.presets import DECAY
 from discosyn_jax import tasks
 from discosyn_jax.tasks import TASK_SETS
 
-_DECAYED = f"-wd{DECAY['decoder_weight_decay']:g}a{DECAY['decoder_weight_decay_steps']}"
-METHOD_ORDER = ("PPO", "PCA4", "AE4", "PCA6", "AE6")
-for _b in (3, 4, 6):
-  # each linear DiscoSyn row above its own controls (its start frozen, the matched control):
-  # today's default start (the reward prior) first, then the object prior's, the paper's
-  # random start and its decayed update; then the random decoder frozen, every start's
-  # control (z bounded, z free); the same for the mlp decoder
-  for _start, _frozen in ((REWARDED, f"Prior{_b}-L{REWARDED}"), (OBJECTS_SUFFIX, f"Prior{_b}-L{OBJECTS_SUFFIX}"),
-                          ("", None), (_DECAYED, None)):
-    METHOD_ORDER += (f"DiscoSyn{_b}-L{_start}",) + ((_frozen,) if _frozen else ()) + (
-        f"Random{_b}-L-matched{_start}",)
-  METHOD_ORDER += tuple(f"{m}{_b}-{k}{c}" for k in ("L", "NL") for m, c in (
-      ("DiscoSyn", ""), ("Random", ""), ("Random", "-zfree")) if (k, m) != ("L", "DiscoSyn"))
+# the decayed update's row, ranked beside the paper's update (Method.rank)
+DECAYED = Method("DiscoSyn", decay=DECAY["decoder_weight_decay"],
+                 decay_steps=DECAY["decoder_weight_decay_steps"])
 MAIN_EXPERIMENTS = ("discosyn", "baselines", "confirm")
 FINAL_K = folder.FINAL_K
 
@@ -44,7 +35,7 @@ FINAL_K = folder.FINAL_K
 class Run(folder.Run):
   """A run as the report reads it (folder.Run), with the labels its tables group it by."""
   experiment: str
-  method: str
+  method: Method
   task_set: str
   seed: int
   scale: str | None  # None for a run `discosyn experiment` did not make
@@ -80,19 +71,18 @@ def action_size(task: str, hand: str) -> int:
   return len(hands.actuators(hand))
 
 
-def method_of(config: TrainConfig) -> str:
+def method_of(config: TrainConfig) -> Method:
   """The method a config runs, as the report names it where experiment.json is silent."""
   from discosyn_jax.synergies import fitting
 
-  if config.decoder == "identity":
-    return "PPO"
-  if not config.decoder_from:
-    return fitting.method_name(config)
-  residual = fitting.residual_suffix(config)  # what the frozen run acts with beside it
+  if not config.decoder_from or config.decoder == "identity":
+    return Method.of(config)
+  # a frozen space, named by its source and the residual it acts with here
+  frozen = dict(frozen=True, frozen_residual=Residual.of(config))
   try:  # a synergy file knows its method (PCA, AE); a run folder is DiscoSyn's
-    return fitting.method_name(fitting.read(config.decoder_from)[0]) + " frozen" + residual
+    return Method.of(fitting.read(config.decoder_from)[0]).replace(**frozen)
   except ValueError:
-    return fitting.method_name(config).removesuffix(residual) + " frozen" + residual
+    return Method.of(config).replace(residual=None, **frozen)
 
 
 def set_of(config: TrainConfig) -> str:
@@ -117,7 +107,7 @@ def load_run(path: pathlib.Path) -> Run:
     task_set = f"{task_set} on {hands.label(config.hand)}"
   fields = {f.name: getattr(run, f.name) for f in dataclasses.fields(folder.Run)}
   return Run(**{**fields, "path": path}, experiment=meta.get("experiment", "train"),
-             method=meta["method"] if "method" in meta else method_of(config),
+             method=Method.parse(meta["method"]) if "method" in meta else method_of(config),
              task_set=task_set, seed=meta.get("seed", config.seed), scale=meta.get("scale"))
 
 
@@ -158,6 +148,6 @@ def _one_run_per_seed(runs: list[Run]) -> None:
     seen[key] = run
 
 
-def order(methods) -> list[str]:
-  known = [m for m in METHOD_ORDER if m in methods]
-  return known + sorted(set(methods) - set(known))
+def order(methods) -> list[Method]:
+  """Methods in the report's order of rows (Method.rank)."""
+  return sorted(set(methods), key=lambda m: m.rank(DECAYED))

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+from discosyn_jax import quiet_mjx  # noqa: F401  (first: MJX imported quietly, before brax)
 from brax.envs.base import Env, State, Wrapper
 
 from discosyn_jax.agent import networks

@@ -57,9 +57,10 @@ def hand_of(hand_name: str) -> dict[str, Any]:
 
 
 def export(run_dir: str | pathlib.Path, path: str | pathlib.Path,
-           date: str | None = None) -> pathlib.Path:
+           date: str | None = None, method: str | None = None) -> pathlib.Path:
   """Write the synergy file of a finished run (its final decoder, or its record's
-  decoder.npz) to `path`, with its hand, what it was learned on and how well."""
+  decoder.npz) to `path`, with its hand, what it was learned on and how well; `method` its
+  row's name where the run's experiment.json does not say it."""
   from discosyn_jax.run import folder
 
   run = folder.read(run_dir)
@@ -79,7 +80,7 @@ def export(run_dir: str | pathlib.Path, path: str | pathlib.Path,
       hand=hand_of(config.hand),
       learned_on={"tasks": list(config.tasks), "env_steps": run.evaluations[-1]["env_steps"],
                   "seed": config.seed,
-                  "method": run.labels.get("method", fitting.method_name(config)),
+                  "method": run.labels.get("method", method),
                   "set": run.labels.get("set")},
       success={**success, **extra},
       date=date or datetime.date.today().isoformat(), release=_release())

@@ -30,7 +30,6 @@ import numpy as np
 import optax
 
 from discosyn_jax.agent import networks
-from discosyn_jax.config import OLD_STARTS
 
 ARCHITECTURE = ("decoder", "n_synergies", "decoder_bias", "decoder_hidden", "squash_z")
 _DEFAULTS = {"squash_z": False}  # fields added since the first synergy files were written
@@ -44,7 +43,7 @@ def architecture(fields: dict[str, Any]) -> dict[str, Any]:
 
 def meta_of(config) -> dict[str, Any]:
   """A run's decoder as a synergy file's meta: its architecture and its start (the start
-  names the rows that freeze it, method_name)."""
+  names the rows that freeze it, experiments/method.py)."""
   return {k: getattr(config, k) for k in (*ARCHITECTURE, "decoder_init")}
 _RUN_DECODER = "params.params.synergy_decoder."
 
@@ -305,47 +304,6 @@ def load_decoder(path, config) -> dict:
       raise ValueError(f"the decoder in {path} has {name} = {meta[name]!r}, the config asks for "
                        f"{getattr(config, name)!r}")
   return params
-
-
-def method_name(meta) -> str:
-  """The paper's name of a synergy model: 'PCA4', 'AE6', 'DiscoSyn3-L', 'DiscoSyn4-NL', and
-  'Random3-L' for the control (a decoder frozen at its random initialisation), and
-  'DiscoSyn3-L-wd3' for a decoder learned with weight decay 3 (a tie-breaker),
-  'DiscoSyn3-L-wd8a200' for one whose decay falls to nothing over 200 train steps;
-  'DiscoSyn3-L-objects' for one started from the objects prior, 'Prior3-L-objects' for that
-  start frozen; 'DiscoSyn3-L-reward' and 'Prior3-L-reward' for the reward prior's; a
-  residual beside the synergies last (residual_suffix): 'DiscoSyn3-L-reward-res0.3r75'.
-  `meta` is a synergy file's meta, or anything with the ARCHITECTURE fields (a config)."""
-  get = meta.get if isinstance(meta, dict) else lambda k, d=None: getattr(meta, k, d)
-  if get("method"):
-    return f"{get('method')}{get('n_synergies')}"
-  # a config whose decoder is frozen at its own start: DiscoSyn's controls, Random or Prior
-  init = OLD_STARTS.get(get("decoder_init", "random"), get("decoder_init", "random"))
-  kind = "DiscoSyn"
-  if get("freeze_decoder") and not get("decoder_from"):
-    kind = "Random" if init == "random" else "Prior"
-  name = f"{kind}{get('n_synergies')}-{'L' if get('decoder') == 'linear' else 'NL'}"
-  if init != "random":  # the start, named as decoder_init names it
-    name += f"-{init}"
-  decay = 0 if get("freeze_decoder") else get("decoder_weight_decay")  # frozen: never applied
-  if decay:
-    anneal = get("decoder_weight_decay_steps", 0)
-    name += f"-wd{decay:g}" + (f"a{anneal}" if anneal else "")
-  return name + residual_suffix(meta)
-
-
-def residual_suffix(meta) -> str:
-  """A residual's part of a method's name: '-res' and its cap, 'r' its ramp and 's' its
-  start in the run's train steps where set ('-res0.3r75'), as the run's records have named
-  them since the schedule was counted in steps; '' without a residual (agent/residual.py)."""
-  get = meta.get if isinstance(meta, dict) else lambda k, d=None: getattr(meta, k, d)
-  cap = get("residual", 0.0) or 0.0
-  if not cap:
-    return ""
-  steps = get("steps", 0) or 0
-  ramp, start = round((get("residual_ramp", 0.0) or 0.0) * steps), round(
-      (get("residual_start", 0.0) or 0.0) * steps)
-  return f"-res{cap:g}" + (f"r{ramp}" if ramp else "") + (f"s{start}" if start else "")
 
 
 def frozen_fields(meta: dict[str, Any], path) -> dict[str, Any]:

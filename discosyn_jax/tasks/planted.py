@@ -34,6 +34,7 @@ import functools
 import jax
 import jax.numpy as jnp
 import numpy as np
+from discosyn_jax import quiet_mjx  # noqa: F401  (first: MJX imported quietly, before brax)
 from brax.envs.base import Env, State
 
 from discosyn_jax import checks

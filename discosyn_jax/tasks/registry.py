@@ -11,10 +11,11 @@ import importlib.util
 import pathlib
 from typing import Callable
 
+from discosyn_jax import quiet_mjx  # noqa: F401  (first: MJX imported quietly, before brax)
 from brax.envs.base import Env
 
-from discosyn_jax.config import PHYSICS
-from discosyn_jax.env import hands  # (discosyn_jax.env imports MJX quietly, before brax does)
+from discosyn_jax.env.settings import PHYSICS
+from discosyn_jax.env import hands
 from discosyn_jax.env.hand_env import HandEnv
 from discosyn_jax.env.task import Task, TaskConfig, TaskError, label, traceback_frames  # noqa: F401
 from discosyn_jax.run import jax_setup
@@ -212,7 +213,7 @@ def make_config(name: str, **overrides) -> TaskConfig:
 
 
 def physics_overrides(name: str, physics: str) -> dict:
-  """The task config fields that physics profile `physics` (config.PHYSICS) sets for task
+  """The task config fields that physics profile `physics` (env/settings.py: PHYSICS) sets for task
   `name`: none for "reference" (TaskConfig's own defaults: 4 ms x 10)."""
   if physics not in PHYSICS:
     raise ValueError(f"unknown physics {physics!r}; known: {', '.join(PHYSICS)}")
@@ -224,7 +225,7 @@ def make(name: str, *, backend: str = "auto", physics: str = "fast", hand: str =
          **overrides) -> Env:
   """The environment of task `name` on `backend` ("auto", "native" or "mjx"; a pure-JAX
   task has none and ignores it, as it ignores `hand`), with the physics profile `physics`
-  (config.PHYSICS) and `hand` (discosyn_jax.env.hands.load: a shipped hand or an MJCF file).
+  (env/settings.py: PHYSICS) and `hand` (discosyn_jax.env.hands.load: a shipped hand or an MJCF file).
 
   `overrides` replace fields of the task's default config (e.g. frictionloss=0.2).
   """

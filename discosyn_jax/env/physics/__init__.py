@@ -17,7 +17,7 @@ from __future__ import annotations
 import jax
 import mujoco
 
-from discosyn_jax.config import BACKENDS as _CHOICES
+from discosyn_jax.env.settings import BACKENDS as _CHOICES
 from discosyn_jax.env.physics.view import PhysicsView
 
 __all__ = ["BACKENDS", "PhysicsView", "make_backend", "resolve"]

@@ -9,6 +9,7 @@ import os
 import jax
 import jax.numpy as jnp
 import mujoco
+from discosyn_jax import quiet_mjx  # noqa: F401  (first: MJX imported quietly, before brax)
 from mujoco import mjx
 
 from discosyn_jax.env.physics.view import PhysicsView

@@ -31,6 +31,7 @@ import jax
 import jax.numpy as jnp
 import mujoco
 import numpy as np
+from discosyn_jax import quiet_mjx  # noqa: F401  (first: MJX imported quietly, before brax)
 from flax import struct
 from mujoco import mjx
 

@@ -1,0 +1,196 @@
+"""What a run is, as a value: a `Method` (family, synergies, decoder, start, decay, control,
+residual, frozen) whose `.name` is the row name the records carry ('PPO', 'PCA4',
+'DiscoSyn3-L-reward', 'Random3-L-zfree-res0.3r150', 'DiscoSyn3-L-reward frozen'), read back
+by `Method.parse`; `Method.of(config)` names what a config runs; `rank` is the order of the
+report's rows. The planner builds Methods, the report groups and orders runs by them.
+
+A name, part by part: the family and its number of synergies ('DiscoSyn3'); the decoder
+('-L' linear, '-NL' mlp; none for PPO and the fitted PCA / AE); '-matched' for the random
+decoder that copies a learned run's update (the parts after it are that run's); the
+decoder's start where not random ('-reward', '-objects'); its weight decay ('-wd8a200':
+8, falling to nothing over 200 train steps); '-zfree' where the heads' z is unbounded; a
+study's own label parts ('-alpha3=0.1'); a residual beside the synergies ('-res0.3r150s400':
+its cap, ramp and start in the run's train steps); and ' frozen' for that space frozen and
+used on other tasks, with the residual it acts with there ('... frozen-res0.3r150')."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from typing import Any
+
+from discosyn_jax.config import OLD_STARTS
+
+FAMILIES = ("PPO", "PCA", "AE", "DiscoSyn", "Random", "Prior")
+DECODERS = {"linear": "L", "mlp": "NL"}
+STARTS = ("reward", "objects")  # a decoder's start as the name says it; random says nothing
+CONTROLS = ("matched", "zfree")
+
+
+@dataclasses.dataclass(frozen=True)
+class Residual:
+  """A residual beside the synergies (agent/residual.py): its cap, and its ramp and start in
+  the run's train steps (0: none)."""
+  cap: float
+  ramp: int = 0
+  start: int = 0
+
+  @property
+  def name(self) -> str:
+    return f"-res{self.cap:g}" + (f"r{self.ramp}" if self.ramp else "") + (
+        f"s{self.start}" if self.start else "")
+
+  @classmethod
+  def of(cls, source) -> "Residual | None":
+    """The residual a config (or a dict of its fields) runs with, None without one."""
+    get = _getter(source)
+    cap = get("residual", 0.0) or 0.0
+    if not cap:
+      return None
+    steps = get("steps", 0) or 0
+    return cls(cap, round((get("residual_ramp", 0.0) or 0.0) * steps),
+               round((get("residual_start", 0.0) or 0.0) * steps))
+
+
+_RESIDUAL = re.compile(r"res(?P<cap>\d+(?:\.\d+)?)(?:r(?P<ramp>\d+))?(?:s(?P<start>\d+))?")
+_DECAY = re.compile(r"wd(?P<decay>\d+(?:\.\d+)?)(?:a(?P<steps>\d+))?")
+_NAME = re.compile(r"(?P<family>" + "|".join(FAMILIES) + r")(?P<b>\d*)(?:-(?P<decoder>L|NL))?"
+                   r"(?P<parts>(?:-[^ ]+)?)(?P<frozen> frozen(?P<acting>-\S+)?)?")
+
+
+@dataclasses.dataclass(frozen=True)
+class Method:
+  family: str
+  synergies: int = 0  # b; 0 for PPO
+  decoder: str = ""  # "L", "NL"; "" for PPO and a fitted space
+  control: str = ""  # "matched" or "zfree" (CONTROLS), "" for none
+  start: str = ""  # the decoder's start (STARTS); "" for random
+  decay: float = 0.0  # the decoder's weight decay, and the train steps it falls over
+  decay_steps: int = 0
+  tag: tuple[str, ...] = ()  # a study's own label parts
+  residual: Residual | None = None
+  frozen: bool = False  # this space frozen, used on other tasks
+  frozen_residual: Residual | None = None  # the residual the frozen space acts with
+
+  def __post_init__(self):
+    if self.family not in FAMILIES:
+      raise ValueError(f"unknown method family {self.family!r}; families: {', '.join(FAMILIES)}")
+
+  @property
+  def name(self) -> str:
+    name = self.family + (str(self.synergies) if self.synergies else "")
+    name += f"-{self.decoder}" if self.decoder else ""
+    name += "-matched" if self.control == "matched" else ""
+    name += f"-{self.start}" if self.start else ""
+    if self.decay:
+      name += f"-wd{self.decay:g}" + (f"a{self.decay_steps}" if self.decay_steps else "")
+    name += "-zfree" if self.control == "zfree" else ""
+    name += "".join(f"-{part}" for part in self.tag)
+    name += self.residual.name if self.residual else ""
+    if self.frozen:
+      name += " frozen" + (self.frozen_residual.name if self.frozen_residual else "")
+    return name
+
+  def __str__(self) -> str:
+    return self.name
+
+  def __lt__(self, other: "Method") -> bool:  # runs sorted by name where ranks tie
+    return self.name < other.name
+
+  def replace(self, **changes) -> "Method":
+    return dataclasses.replace(self, **changes)
+
+  @classmethod
+  def parse(cls, name: str) -> "Method":
+    """The Method a name stands for; a name this release would not write is refused."""
+    match = _NAME.fullmatch(name)
+    if not match:
+      raise ValueError(f"{name!r} is not a method's name (e.g. PPO, PCA4, DiscoSyn3-L-reward, "
+                       "Random3-L-zfree, DiscoSyn3-L-reward frozen)")
+    fields: dict[str, Any] = dict(family=match["family"], synergies=int(match["b"] or 0),
+                                  decoder=match["decoder"] or "", frozen=bool(match["frozen"]))
+    tag = []
+    for part in match["parts"].split("-")[1:]:
+      residual, decay = _RESIDUAL.fullmatch(part), _DECAY.fullmatch(part)
+      if part in CONTROLS:
+        fields["control"] = part
+      elif part in STARTS:
+        fields["start"] = part
+      elif decay:
+        fields.update(decay=float(decay["decay"]), decay_steps=int(decay["steps"] or 0))
+      elif residual:
+        fields["residual"] = _residual(residual)
+      else:
+        tag.append(part)
+    if match["acting"]:
+      acting = _RESIDUAL.fullmatch(match["acting"][1:])
+      if not acting:
+        raise ValueError(f"{name!r}: a frozen method acts with a residual ('-res0.3r150'), "
+                         f"not {match['acting'][1:]!r}")
+      fields["frozen_residual"] = _residual(acting)
+    method = cls(**fields, tag=tuple(tag))
+    if method.name != name:  # parts out of their order, or a residual not last
+      raise ValueError(f"{name!r} is not a method's name as written: its parts in order "
+                       f"read {method.name!r}")
+    return method
+
+  @classmethod
+  def of(cls, source) -> "Method":
+    """What a config runs (or a synergy file's meta says it holds): PPO for the full action
+    space; a fitted space by its method ('PCA4'); else a decoder, frozen at its own start
+    (Random, Prior) or learned (DiscoSyn). `-zfree`, `-matched` and ` frozen` are the
+    planner's to add: a config alone does not say which control it is."""
+    get = _getter(source)
+    if get("decoder") == "identity":
+      return cls("PPO")
+    if get("method"):  # a fitted space: PCA, AE
+      return cls(get("method"), get("n_synergies"))
+    init = get("decoder_init", "random") or "random"
+    init = OLD_STARTS.get(init, init)
+    family = "DiscoSyn"
+    if get("freeze_decoder") and not get("decoder_from"):
+      family = "Random" if init == "random" else "Prior"
+    decay = 0.0 if get("freeze_decoder") else (get("decoder_weight_decay", 0.0) or 0.0)
+    return cls(family, get("n_synergies"), DECODERS[get("decoder")],
+               start="" if init == "random" else init, decay=decay,
+               decay_steps=(get("decoder_weight_decay_steps", 0) or 0) if decay else 0,
+               residual=Residual.of(source))
+
+  @property
+  def plain(self) -> Method:
+    """The method without its residual, tag or freezing: the row it belongs to."""
+    return self.replace(tag=(), residual=None, frozen=False, frozen_residual=None)
+
+  def rank(self, decayed: Method | None = None) -> tuple:
+    """The report's order: PPO, the fitted spaces (PCA, AE by size), then per number of
+    synergies each linear DiscoSyn start above its controls (the reward prior's, the
+    objects prior's, the paper's random start, `decayed` (the preset decay's update)),
+    the random decoder (z bounded, z free), the mlp rows; every other method after, by name."""
+    if self != self.plain:
+      return (9, self.name)
+    if self.family == "PPO":
+      return (0,)
+    if self.family in ("PCA", "AE") and not self.decoder:
+      return (1, self.synergies, FAMILIES.index(self.family))
+    update = (self.start, self.decay, self.decay_steps)
+    updates = [(start, 0.0, 0) for start in (*STARTS, "")] + (
+        [(decayed.start, decayed.decay, decayed.decay_steps)] if decayed else [])
+    rows = {}  # (family, decoder, control, update) -> place in its b's group
+    for slot, each in enumerate(updates):
+      rows[("DiscoSyn", "L", "", each)] = (slot, 0)
+      if each[0] and not each[1]:
+        rows[("Prior", "L", "", each)] = (slot, 1)
+      rows[("Random", "L", "matched", each)] = (slot, 2)
+    rows.update({("Random", "L", "", ("", 0.0, 0)): (4, 0), ("Random", "L", "zfree", ("", 0.0, 0)): (4, 1),
+                 ("DiscoSyn", "NL", "", ("", 0.0, 0)): (5, 0), ("Random", "NL", "", ("", 0.0, 0)): (5, 1),
+                 ("Random", "NL", "zfree", ("", 0.0, 0)): (5, 2)})
+    place = rows.get((self.family, self.decoder, self.control, update))
+    return (2, self.synergies, *place) if place else (9, self.name)
+
+
+def _residual(match: re.Match) -> Residual:
+  return Residual(float(match["cap"]), int(match["ramp"] or 0), int(match["start"] or 0))
+
+
+def _getter(source):
+  return source.get if isinstance(source, dict) else lambda k, d=None: getattr(source, k, d)

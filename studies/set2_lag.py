@@ -1,0 +1,94 @@
+"""Why the synergy rows find set #2's weight pull and dice later than full-action PPO: what
+the committed records' training logs already say, run by run, with no new training.
+
+Per run and task (the weight pull and the dice by default), from metrics.jsonl (the
+stochastic policy that collects the samples) and eval.jsonl (the deterministic one):
+  found      the task's env steps when its evaluated success first reaches 0.8 ('-': never)
+  paid       the training rollouts' mean reward from the task's own term (the weight pull's
+             lift, the dice's orientation) over the first WINDOW env steps of the task: how
+             far the exploring policy reaches what the task pays before it is found
+  H/dim      the head's entropy per dimension of what it samples (z for a synergy row, the
+             20 actions for PPO) at the start and at the end of the window: how much the head
+             still explores
+  bonus      the discriminator bonus alpha2 log q(z|a) per step over the window (0 for PPO),
+             beside `paid`: whether the bonus outweighs what the task pays
+
+  python -m studies.set2_lag [RECORD_FOLDER ...] [--tasks weight_pull dice] [--window 500000]
+
+Defaults: set #2's records at the `cpu` scale (fast physics): the paper's default, PPO, the
+prior frozen, the random decoder with z free, and the residual rows."""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+
+import numpy as np
+
+RECORDS = ("docs/results/paper", "docs/results/residual-set2", "docs/results/set2-zfree",
+           "docs/results/confirm-late-residual")
+# each task's own reward term: what it pays for the motion it asks for
+TERM = {"weight_pull": "reward/lift", "dice": "reward/orientation", "valve3": "reward/turn",
+        "screw": "reward/screw"}
+FOUND = 0.8
+
+
+def runs(folders) -> list:
+  from discosyn_jax.experiments import report_runs
+
+  found, _ = report_runs.find(folders)
+  return [r for r in found if r.task_set == "set2" and r.finished]
+
+
+def found_at(run, task: str) -> float | None:
+  for row in run.evaluations:
+    if row.get(f"{task}/success", 0.0) >= FOUND:
+      return run.per_task_env_steps(row)
+  return None
+
+
+def window_rows(run, window: int) -> list[dict]:
+  return [row for row in run.metrics if run.per_task_env_steps(row) <= window]
+
+
+def entropy_per_dim(run, task: str, row: dict) -> float:
+  size = run.config.n_synergies if run.config.decoder != "identity" else run.action_size
+  return row[f"{task}/entropy_z"] / size
+
+
+def summary(run, task: str, window: int) -> dict:
+  rows = window_rows(run, window)
+  term = f"{task}/{TERM[task]}"
+  return dict(found=found_at(run, task),
+              paid=float(np.mean([r[term] for r in rows if term in r])),
+              h_start=entropy_per_dim(run, task, rows[0]), h_end=entropy_per_dim(run, task, rows[-1]),
+              bonus=float(np.mean([r.get(f"{task}/bonus", 0.0) for r in rows])))
+
+
+def main(argv=None) -> None:
+  parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+  parser.add_argument("folders", nargs="*", type=pathlib.Path,
+                      default=[pathlib.Path(p) for p in RECORDS])
+  parser.add_argument("--tasks", nargs="+", default=["weight_pull", "dice"], choices=sorted(TERM))
+  parser.add_argument("--window", type=int, default=500_000,
+                      help="env steps of a task over which `paid`, H/dim and bonus are read")
+  args = parser.parse_args(argv)
+  from discosyn_jax.experiments.report_runs import order
+
+  found = runs(args.folders)
+  for task in args.tasks:
+    print(f"\n{task}: found = env steps to evaluated success {FOUND}; over the first "
+          f"{args.window:,} env steps: paid = mean {TERM[task]} per step, H/dim = the head's "
+          "entropy per dimension at its start and end, bonus = alpha2 log q per step\n")
+    print("| method | seed | found | paid | H/dim start -> end | bonus |")
+    print("|---|---|---|---|---|---|")
+    for method in order({r.method for r in found}):
+      for run in sorted((r for r in found if r.method == method), key=lambda r: r.seed):
+        s = summary(run, task, args.window)
+        at = "-" if s["found"] is None else f"{s['found'] / 1e6:.2f} M"
+        print(f"| {method} | {run.seed} | {at} | {s['paid']:.4f} | {s['h_start']:.2f} -> "
+              f"{s['h_end']:.2f} | {s['bonus']:.4f} |")
+
+
+if __name__ == "__main__":
+  main()

@@ -1,0 +1,82 @@
+"""A method as a value: every name the committed records carry reads back to itself, a name
+out of order is refused, a config names its method, and the report orders rows by rank."""
+
+import json
+import pathlib
+import warnings
+
+import pytest
+
+from discosyn_jax.experiments import presets, report, report_runs
+from discosyn_jax.experiments.method import Method, Residual
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+
+
+def committed_names() -> set[str]:
+  names = {json.loads(p.read_text())["method"] for p in (ROOT / "docs" / "results").rglob("experiment.json")}
+  return names - {"fit"}
+
+
+def test_every_committed_record_name_reads_back_to_itself():
+  names = committed_names()
+  assert len(names) > 30 and "DiscoSyn3-L-reward-res0.3r150 frozen-res1r150" in names
+  for name in names:
+    assert Method.parse(name).name == name
+
+
+def test_a_name_reads_as_its_parts():
+  m = Method.parse("DiscoSyn3-L-reward-res0.3r150 frozen-res1r150")
+  assert (m.family, m.synergies, m.decoder, m.start, m.frozen) == ("DiscoSyn", 3, "L", "reward", True)
+  assert m.residual == Residual(0.3, 150) and m.frozen_residual == Residual(1.0, 150)
+  m = Method.parse("Random3-L-matched-wd8a200")
+  assert (m.family, m.control, m.decay, m.decay_steps) == ("Random", "matched", 8.0, 200)
+  assert Method.parse("DiscoSyn3-L-alpha3=0.1").tag == ("alpha3=0.1",)
+  assert Method.parse("PCA4") == Method("PCA", 4) and Method.parse("PPO") == Method("PPO")
+
+
+@pytest.mark.parametrize("name", ["DiscoSyn3-L-zfree-reward", "DiscoSyn3-L-res0.3-reward",
+                                  "Foo3-L", "DiscoSyn3-L frozen-wd3", ""])
+def test_a_name_out_of_order_or_unknown_is_refused(name):
+  with pytest.raises(ValueError, match="method"):
+    Method.parse(name)
+
+
+def test_a_config_names_its_method():
+  set1 = presets.preset("set1-disco3-linear-reward")
+  assert Method.of(set1) == Method("DiscoSyn", 3, "L", start="reward")
+  assert Method.of(set1.replace(freeze_decoder=True)).name == "Prior3-L-reward"
+  assert Method.of(set1.replace(freeze_decoder=True, decoder_init="random")).name == "Random3-L"
+  late = presets.preset("set2-disco6-linear-residual-late").replace(steps=1200)
+  assert Method.of(late).name == "DiscoSyn6-L-reward-res0.3r200s400"
+  assert Method.of(presets.preset("set1-ppo")).name == "PPO"
+  # a frozen space without a synergy file to read: named by its config, frozen
+  frozen = set1.replace(decoder_from="/nowhere/decoder.npz", freeze_decoder=True, residual=0.3,
+                        residual_ramp=0.5, steps=300)
+  assert report_runs.method_of(frozen).name == "DiscoSyn3-L-reward frozen-res0.3r150"
+
+
+def test_the_report_orders_rows_by_rank():
+  names = ["Random3-L-zfree", "DiscoSyn3-L-reward-res0.3r150", "AE4", "DiscoSyn3-L",
+           "Prior3-L-reward", "PPO", "DiscoSyn4-L-reward", "DiscoSyn3-L-reward", "PCA4",
+           "Random3-L-matched-reward", "DiscoSyn3-L-wd8a200", "Random3-L", "DiscoSyn3-NL",
+           "Random3-NL-zfree", "AE6", "Random3-L-matched-wd8a200", "DiscoSyn3-L-objects"]
+  ordered = [m.name for m in report_runs.order(map(Method.parse, names))]
+  assert ordered == ["PPO", "PCA4", "AE4", "AE6", "DiscoSyn3-L-reward", "Prior3-L-reward",
+                     "Random3-L-matched-reward", "DiscoSyn3-L-objects", "DiscoSyn3-L",
+                     "DiscoSyn3-L-wd8a200", "Random3-L-matched-wd8a200", "Random3-L",
+                     "Random3-L-zfree", "DiscoSyn3-NL", "Random3-NL-zfree", "DiscoSyn4-L-reward",
+                     "DiscoSyn3-L-reward-res0.3r150"]
+  # the paper's row of today's default start, and of nothing else
+  assert report.paper_row(Method.parse("DiscoSyn3-L-reward")) == "DiscoSyn3-L"
+  assert report.paper_row(Method.parse("DiscoSyn3-L-reward-res0.3r150")) == "DiscoSyn3-L-reward-res0.3r150"
+
+
+def test_the_old_path_of_run_still_imports_with_a_warning():
+  from discosyn_jax import api
+  from discosyn_jax.run import folder
+
+  with warnings.catch_warnings(record=True) as caught:
+    warnings.simplefilter("always")
+    assert api.Run is folder.Run
+  assert any(issubclass(w.category, FutureWarning) and "run.folder" in str(w.message) for w in caught)
