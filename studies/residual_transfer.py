@@ -51,14 +51,13 @@ def frozen_meta(source: pathlib.Path, config) -> dict:
 def train_row(out: pathlib.Path, name: str, config, meta: dict) -> pathlib.Path:
   """Train `config` into OUT/NAME as a step of `discosyn experiment` does (resumed where
   unfinished, kept where finished), ending with its record and experiment.json `meta`."""
-  from discosyn_jax import tasks
   from discosyn_jax.experiments import paper
 
   step, quiet = paper.Train(name, config, meta), lambda *a: None
   if step.done(out):
-    step.settle(out, tasks.trainer, quiet)
+    step.settle(out, quiet)
   else:
-    step.run(out, tasks.trainer, False, quiet)
+    step.run(out, False, quiet)
   return out / name
 
 

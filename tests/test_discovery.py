@@ -18,7 +18,7 @@ from discosyn_jax.training.trainer import Trainer
 from discosyn_jax.tasks import assemble
 from discosyn_jax.experiments import paper, presets, report
 from discosyn_jax.experiments.method import Method
-from discosyn_jax.tasks import planted
+from discosyn_jax.tasks import planted, registry
 from tests import toy_env
 
 TARGET = np.linspace(-0.8, 0.8, 20)
@@ -95,6 +95,27 @@ def test_planted_reward_and_success_count_the_error_in_the_span_only_with_slack(
   # targets change per episode
   other = strict.reset(jax.random.PRNGKey(4)).pipeline_state["target"]
   assert float(jnp.abs(other - target).max()) > 0.01
+
+
+def test_the_found_task_pays_nothing_until_an_action_lands_near_its_target():
+  """planted_found3: the dense reward inside paid_within of a typical target, 0 outside;
+  success as for the dense task. Its set: three dense tasks and it."""
+  assert tasks.TASK_SETS["planted_found"][-1] == "planted_found3"
+  found, dense = tasks.make("planted_found3"), tasks.make("planted3")
+  assert found.config.paid_within == registry.PAID_WITHIN > 0
+  state = found.reset(jax.random.PRNGKey(5))
+  target = state.pipeline_state["target"]
+  np.testing.assert_array_equal(target, dense.reset(jax.random.PRNGKey(5)).pipeline_state["target"])
+  radius = registry.PAID_WITHIN * np.sqrt(found._target_power)  # the error where pay starts
+  direction = target / jnp.linalg.norm(target)
+  for error, paid in ((0.9 * radius, True), (1.1 * radius, False)):
+    action = target - error * direction
+    hit, dense_hit = found.step(state, action), dense.step(state, action)
+    assert float(hit.reward) == (pytest.approx(float(dense_hit.reward)) if paid else 0.0)
+    assert float(hit.metrics["success"]) == float(dense_hit.metrics["success"])
+  assert float(found.step(state, jnp.zeros(20)).reward) == 0.0  # where the dense one pays ~0
+  with pytest.raises(ValueError, match="paid_within"):
+    tasks.make("planted0", paid_within=1.5)
 
 
 def test_a_decoder_trained_on_planted_tasks_finds_the_span():

@@ -256,7 +256,7 @@ def test_transfer_and_sparse_freeze_the_residual_rows_decoder_and_act_with_its_r
     assert paper_row.config.residual == 0.0
     assert by_method[experiment, task_set, "PPO"].config.residual == 0.0
     # a run without its experiment.json is named from its config the same way
-    assert report_runs.method_of(frozen.config) == f"DiscoSyn{b}-L frozen-res0.3r{half}"
+    assert report_runs.method_of(frozen.config).name == f"DiscoSyn{b}-L frozen-res0.3r{half}"
   names = [s.name for s in planner.plan("transfer")]
   assert len(names) == len(set(names))
   assert sum(n.startswith("transfer-ppo-set1") for n in names) == 1
@@ -281,7 +281,7 @@ def test_the_report_shows_each_parts_share_of_the_action():
       (m, t) for m in ("DiscoSyn3-L-reward-res0.3r150", "Random3-L-zfree-res0.3r150")
       for t in ("valve0", "valve1", "valve2", "valve3")]
   ends = [[row for row in r.metrics if "residual/rho" in row][-10:]
-          for r in runs if r.method.startswith("DiscoSyn")]
+          for r in runs if r.method.family == "DiscoSyn"]
   share = [np.mean([row["valve2/action_residual"] for row in rows_]) for rows_ in ends]
   assert rows[2][5].startswith(f"{np.mean(share):.2f} ({min(share):.2f}–{max(share):.2f}) [2]")
   assert report.residual_table([r for r in runs if r.config.residual == 0]) == ""

@@ -62,13 +62,13 @@ def test_the_residual_schedule_study_refuses_a_preset_without_a_residual(capsys,
   assert not any(tmp_path.iterdir())  # nothing trained, nothing written
 
 
-def test_the_set2_lag_study_reads_when_a_run_finds_a_task(capsys):
+def test_the_finding_lag_study_reads_when_a_run_finds_a_task(capsys):
   """Its 'found' is the first evaluation at 0.8 or above, in the task's env steps, as the
   record's eval.jsonl has it; PPO's heads get no discriminator bonus."""
   import json
 
   folder = ROOT / "docs" / "results" / "confirm-late-residual"
-  lag = study("set2_lag")
+  lag = study("finding_lag")
   runs = {r.path.name: r for r in lag.runs([folder])}
   ppo = runs["set2-ppo-seed3"]
   rows = [json.loads(line) for line in (ppo.path / "eval.jsonl").read_text().splitlines()]
@@ -80,3 +80,23 @@ def test_the_set2_lag_study_reads_when_a_run_finds_a_task(capsys):
   lag.main([str(folder), "--tasks", "weight_pull"])
   out = capsys.readouterr().out
   assert "| PPO | 3 |" in out and "| DiscoSyn6-L-reward | 3 |" in out
+
+
+def test_the_planted_lag_study_trains_its_variants_and_reads_them(tmp_path, capsys):
+  """Each variant is the planted preset with its one change, named so that the report tells
+  them apart; a tiny run of two variants trains, keeps its record and is read back."""
+  from discosyn_jax.experiments.method import Method
+
+  lag = study("planted_lag")
+  made = {meta["method"]: config for _, config, meta in lag.configs(list(lag.VARIANTS), [0])}
+  assert set(made) == {"DiscoSyn3-L", "DiscoSyn3-L-qact", "DiscoSyn3-L-zfree", "DiscoSyn3-L-alpha2=0"}
+  assert all(Method.parse(name).name == name for name in made)
+  assert made["DiscoSyn3-L-qact"].discriminator_target == "activation"
+  assert not made["DiscoSyn3-L-zfree"].squash_z and made["DiscoSyn3-L-alpha2=0"].alpha2 == 0.0
+  assert made["DiscoSyn3-L"].tasks[-1] == "planted_found3"
+  lag.main(["--seeds", "0", "--variants", "default", "no-bonus", "--steps", "4",
+            "--out", str(tmp_path)])
+  out = capsys.readouterr().out
+  assert "| DiscoSyn3-L | 0 |" in out and "| DiscoSyn3-L-alpha2=0 | 0 | " in out
+  no_bonus = out.split("| DiscoSyn3-L-alpha2=0 | 0 | ")[1].splitlines()[0]
+  assert no_bonus.endswith("| 0.0000 |")  # alpha2 = 0: no bonus paid

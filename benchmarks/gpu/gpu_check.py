@@ -54,6 +54,7 @@ import jax.numpy as jnp  # noqa: E402
 from discosyn_jax import tasks  # noqa: E402
 from discosyn_jax.synergies import start  # noqa: E402
 from discosyn_jax.experiments import bench, paper  # noqa: E402
+from discosyn_jax.experiments.method import Method  # noqa: E402
 from studies import physics_study  # noqa: E402
 
 
@@ -150,12 +151,13 @@ def configs(methods, task_set: str, scale: str, seed: int, backend: str) -> dict
   """{method: TrainConfig} as `discosyn experiment` trains these rows of the set's table."""
   table = {s: t for t, s in paper.TABLES.items()}[task_set]
   planner = paper.Planner(pathlib.Path("unused"), scale, seed)
-  steps = {s.meta["method"]: s for s in paper.select(planner.plan(table), methods)
+  wanted = [Method.parse(m) for m in methods]
+  steps = {s.meta["method"]: s for s in paper.select(planner.plan(table), wanted)
            if isinstance(s, paper.Train)}
   missing = [m for m in methods if m not in steps]
   if missing:
     raise ValueError(f"not rows of {table}: {', '.join(missing)} "
-                     f"(rows: {', '.join(paper.PAPER_ROWS[task_set])})")
+                     f"(rows: {', '.join(map(str, paper.PAPER_ROWS[task_set]))})")
   return {m: steps[m].config.replace(backend=backend).validate() for m in methods}
 
 

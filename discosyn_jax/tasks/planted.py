@@ -19,6 +19,11 @@ outside it is free, so every decoder whose subspace projects onto the whole span
 adequate, as on the hand, where many subspaces turn the valves. Without slack the one
 adequate subspace of `rank` dimensions is the span itself.
 
+With `paid_within` > 0 the task pays nothing until an action lands near its target: the
+reward is 1 - |e|^2 / E|a*|^2 where |e| < paid_within sqrt(E|a*|^2), else 0. A task that
+pays only once it is found, as set #2's weight pull pays nothing until the weight lifts:
+the planted place to watch what exploration does before a task is first paid.
+
 With `outside` > 0 part of each target lies outside the span: a* = s U A_n u + s outside
 u_1 w_n, w_n a unit direction orthogonal to the span, the task's own (u_1 the goal's first
 coordinate, s keeping |a*| <= 0.9). No decoder of the span, and no constant posture, reaches
@@ -55,6 +60,9 @@ class PlantedConfig:
   # the part of each target outside the span, relative to one goal coordinate's part inside
   # (0: every target inside the span)
   outside: float = 0.0
+  # the reward is paid only where the error is below this fraction of a typical target
+  # (0: everywhere, the dense reward)
+  paid_within: float = 0.0
   span_seed: int = SPAN_SEED
 
   def __post_init__(self):
@@ -68,6 +76,8 @@ class PlantedConfig:
                        "tolerance positive")
     if self.outside < 0:
       raise ValueError(f"outside must not be negative, not {self.outside}")
+    if not 0 <= self.paid_within <= 1:
+      raise ValueError(f"paid_within must be between 0 and 1 (0: paid everywhere), not {self.paid_within}")
     if self.outside and self.slack:
       raise ValueError("with slack the error outside the span counts for nothing: a target "
                        "outside it (outside > 0) would ask for nothing")
@@ -143,6 +153,8 @@ class PlantedEnv(Env):
       error = self._projector @ error
     power = jnp.sum(error ** 2)
     reward = 1.0 - power / self._target_power
+    if self.config.paid_within:  # nothing paid until the action is near its target
+      reward = jnp.where(power < self.config.paid_within ** 2 * self._target_power, reward, 0.0)
     success = (power < self.config.tolerance ** 2 * self._target_power).astype(jnp.float32)
     metrics = {**state.metrics, "success": success, "reward/reach": reward}
     return state.replace(reward=reward, metrics=metrics)

@@ -32,14 +32,21 @@ class Entry:
   env: Callable[..., Env] = HandEnv
 
 
-def _planted(index: int, slack: bool) -> Entry:
+def _planted(index: int, slack: bool, paid_within: float = 0.0) -> Entry:
   what = "only the error inside the span counts" if slack else "the whole error counts"
+  if paid_within:
+    what += f"; paid only within {paid_within:g} of a typical target"
   return Entry(lambda config: config,  # the env is built from the config itself
-               lambda **kw: planted.default_config(index=index, slack=slack, **kw),
+               lambda **kw: planted.default_config(index=index, slack=slack,
+                                                   paid_within=paid_within, **kw),
                f"reach a posture in plane {index} of the planted 3-D span; {what}",
                env=planted.PlantedEnv)
 
 
+# planted_found3: no reward until the error is below 0.7 of a typical target's size; the
+# initial decoder's noise (std 0.3 on 20 actuators) alone is larger, so the task is first
+# paid once the dense tasks have narrowed it (std ~0.2: a quarter of the steps at the target)
+PAID_WITHIN = 0.7
 REGISTRY: dict[str, Entry] = {
     "valve0": Entry(valve.Valve, lambda **kw: valve.default_config(arms=0, **kw),
                     "turn a bare vertical stem counter-clockwise"),
@@ -77,6 +84,8 @@ REGISTRY: dict[str, Entry] = {
     # the planted-synergy test bed (pure JAX, discosyn_jax/tasks/planted.py): one span, a plane per task
     **{f"planted{n}": _planted(n, slack=False) for n in range(4)},
     **{f"planted_slack{n}": _planted(n, slack=True) for n in range(4)},
+    # a task of the bed that pays nothing until it is found (planted_found's fourth)
+    "planted_found3": _planted(3, slack=False, paid_within=PAID_WITHIN),
 }
 
 # The "fast" physics profile: each task's cheapest setting that stayed within the tolerances

@@ -1,11 +1,13 @@
-"""Why the synergy rows find set #2's weight pull and dice later than full-action PPO: what
-the committed records' training logs already say, run by run, with no new training.
+"""When each run first finds a task, and what its head did before: why the synergy rows find
+set #2's weight pull and dice later than full-action PPO, read from the records' training
+logs, run by run, with no new training (and the same table for the planted test bed's
+planted_found, studies/planted_lag.py).
 
 Per run and task (the weight pull and the dice by default), from metrics.jsonl (the
 stochastic policy that collects the samples) and eval.jsonl (the deterministic one):
   found      the task's env steps when its evaluated success first reaches 0.8 ('-': never)
   paid       the training rollouts' mean reward from the task's own term (the weight pull's
-             lift, the dice's orientation) over the first WINDOW env steps of the task: how
+             lift, the dice's orientation, a planted task's reach) over the first WINDOW env steps of the task: how
              far the exploring policy reaches what the task pays before it is found
   H/dim      the head's entropy per dimension of what it samples (z for a synergy row, the
              20 actions for PPO) at the start and at the end of the window: how much the head
@@ -13,10 +15,11 @@ stochastic policy that collects the samples) and eval.jsonl (the deterministic o
   bonus      the discriminator bonus alpha2 log q(z|a) per step over the window (0 for PPO),
              beside `paid`: whether the bonus outweighs what the task pays
 
-  python -m studies.set2_lag [RECORD_FOLDER ...] [--tasks weight_pull dice] [--window 500000]
+  python -m studies.finding_lag [RECORD_FOLDER ...] [--set set2] [--tasks weight_pull dice]
+                               [--window 500000]
 
-Defaults: set #2's records at the `cpu` scale (fast physics): the paper's default, PPO, the
-prior frozen, the random decoder with z free, and the residual rows."""
+Defaults: set #2's committed records at the `cpu` scale (fast physics): every row of the
+paper's tables, the residual rows, z free, and the confirmation's runs."""
 
 from __future__ import annotations
 
@@ -29,15 +32,16 @@ RECORDS = ("docs/results/paper", "docs/results/residual-set2", "docs/results/set
            "docs/results/confirm-late-residual")
 # each task's own reward term: what it pays for the motion it asks for
 TERM = {"weight_pull": "reward/lift", "dice": "reward/orientation", "valve3": "reward/turn",
-        "screw": "reward/screw"}
+        "screw": "reward/screw", **{f"planted{n}": "reward/reach" for n in range(4)},
+        "planted_found3": "reward/reach"}
 FOUND = 0.8
 
 
-def runs(folders) -> list:
+def runs(folders, task_set: str = "set2") -> list:
   from discosyn_jax.experiments import report_runs
 
   found, _ = report_runs.find(folders)
-  return [r for r in found if r.task_set == "set2" and r.finished]
+  return [r for r in found if r.task_set == task_set and r.finished]
 
 
 def found_at(run, task: str) -> float | None:
@@ -69,22 +73,26 @@ def main(argv=None) -> None:
   parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
   parser.add_argument("folders", nargs="*", type=pathlib.Path,
                       default=[pathlib.Path(p) for p in RECORDS])
+  parser.add_argument("--set", default="set2", help="the task set whose runs are read")
   parser.add_argument("--tasks", nargs="+", default=["weight_pull", "dice"], choices=sorted(TERM))
   parser.add_argument("--window", type=int, default=500_000,
                       help="env steps of a task over which `paid`, H/dim and bonus are read")
   args = parser.parse_args(argv)
+  print_tables(runs(args.folders, args.set), args.tasks, args.window)
+
+
+def print_tables(found: list, task_names, window: int) -> None:
   from discosyn_jax.experiments.report_runs import order
 
-  found = runs(args.folders)
-  for task in args.tasks:
+  for task in task_names:
     print(f"\n{task}: found = env steps to evaluated success {FOUND}; over the first "
-          f"{args.window:,} env steps: paid = mean {TERM[task]} per step, H/dim = the head's "
+          f"{window:,} env steps: paid = mean {TERM[task]} per step, H/dim = the head's "
           "entropy per dimension at its start and end, bonus = alpha2 log q per step\n")
     print("| method | seed | found | paid | H/dim start -> end | bonus |")
     print("|---|---|---|---|---|---|")
     for method in order({r.method for r in found}):
       for run in sorted((r for r in found if r.method == method), key=lambda r: r.seed):
-        s = summary(run, task, args.window)
+        s = summary(run, task, window)
         at = "-" if s["found"] is None else f"{s['found'] / 1e6:.2f} M"
         print(f"| {method} | {run.seed} | {at} | {s['paid']:.4f} | {s['h_start']:.2f} -> "
               f"{s['h_end']:.2f} | {s['bonus']:.4f} |")
