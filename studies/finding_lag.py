@@ -6,8 +6,10 @@ planted_found, studies/planted_lag.py).
 Per run and task (the weight pull and the dice by default), from metrics.jsonl (the
 stochastic policy that collects the samples) and eval.jsonl (the deterministic one):
   found      the task's env steps when its evaluated success first reaches 0.8 ('-': never)
+  end        its success at the end (the mean of the last 3 evaluations)
   paid       the training rollouts' mean reward from the task's own term (the weight pull's
-             lift, the dice's orientation, a planted task's reach) over the first WINDOW env steps of the task: how
+             lift, the dice's orientation, a planted task's reach) over the first WINDOW env
+             steps of the task: how
              far the exploring policy reaches what the task pays before it is found
   H/dim      the head's entropy per dimension of what it samples (z for a synergy row, the
              20 actions for PPO) at the start and at the end of the window: how much the head
@@ -63,9 +65,10 @@ def entropy_per_dim(run, task: str, row: dict) -> float:
 def summary(run, task: str, window: int) -> dict:
   rows = window_rows(run, window)
   term = f"{task}/{TERM[task]}"
-  return dict(found=found_at(run, task),
+  return dict(found=found_at(run, task), end=run.at_end()[f"{task}/success"],
               paid=float(np.mean([r[term] for r in rows if term in r])),
-              h_start=entropy_per_dim(run, task, rows[0]), h_end=entropy_per_dim(run, task, rows[-1]),
+              h_start=entropy_per_dim(run, task, rows[0]),
+              h_end=entropy_per_dim(run, task, rows[-1]),
               bonus=float(np.mean([r.get(f"{task}/bonus", 0.0) for r in rows])))
 
 
@@ -85,17 +88,17 @@ def print_tables(found: list, task_names, window: int) -> None:
   from discosyn_jax.experiments.report_runs import order
 
   for task in task_names:
-    print(f"\n{task}: found = env steps to evaluated success {FOUND}; over the first "
-          f"{window:,} env steps: paid = mean {TERM[task]} per step, H/dim = the head's "
+    print(f"\n{task}: found = env steps to evaluated success {FOUND}; end = success at the "
+          f"end; over the first {window:,} env steps: paid = mean {TERM[task]} per step, H/dim = the head's "
           "entropy per dimension at its start and end, bonus = alpha2 log q per step\n")
-    print("| method | seed | found | paid | H/dim start -> end | bonus |")
-    print("|---|---|---|---|---|---|")
+    print("| method | seed | found | end | paid | H/dim start -> end | bonus |")
+    print("|---|---|---|---|---|---|---|")
     for method in order({r.method for r in found}):
       for run in sorted((r for r in found if r.method == method), key=lambda r: r.seed):
         s = summary(run, task, window)
         at = "-" if s["found"] is None else f"{s['found'] / 1e6:.2f} M"
-        print(f"| {method} | {run.seed} | {at} | {s['paid']:.4f} | {s['h_start']:.2f} -> "
-              f"{s['h_end']:.2f} | {s['bonus']:.4f} |")
+        print(f"| {method} | {run.seed} | {at} | {s['end']:.2f} | {s['paid']:.4f} | "
+              f"{s['h_start']:.2f} -> {s['h_end']:.2f} | {s['bonus']:.4f} |")
 
 
 if __name__ == "__main__":

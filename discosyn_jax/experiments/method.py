@@ -181,9 +181,10 @@ class Method:
       if each[0] and not each[1]:
         rows[("Prior", "L", "", each)] = (slot, 1)
       rows[("Random", "L", "matched", each)] = (slot, 2)
-    rows.update({("Random", "L", "", ("", 0.0, 0)): (4, 0), ("Random", "L", "zfree", ("", 0.0, 0)): (4, 1),
-                 ("DiscoSyn", "NL", "", ("", 0.0, 0)): (5, 0), ("Random", "NL", "", ("", 0.0, 0)): (5, 1),
-                 ("Random", "NL", "zfree", ("", 0.0, 0)): (5, 2)})
+    paper = ("", 0.0, 0)  # the paper's update: a random start, no decay
+    rows.update({("Random", "L", "", paper): (4, 0), ("Random", "L", "zfree", paper): (4, 1),
+                 ("DiscoSyn", "NL", "", paper): (5, 0), ("Random", "NL", "", paper): (5, 1),
+                 ("Random", "NL", "zfree", paper): (5, 2)})
     place = rows.get((self.family, self.decoder, self.control, update))
     return (2, self.synergies, *place) if place else (9, self.name)
 
