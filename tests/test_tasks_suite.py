@@ -33,7 +33,8 @@ def test_task_sets():
   ours = {name for name, entry in tasks.REGISTRY.items()
           if not isinstance(entry.env, tasks.registry._Whole)}
   assert set(NEW) | {"valve_goal_dense", "dice_full"} | set(tasks.TASK_SETS["set1"]) | \
-      set(tasks.TASK_SETS["planted"]) | set(tasks.TASK_SETS["planted_slack"]) == ours
+      set(tasks.TASK_SETS["planted"]) | set(tasks.TASK_SETS["planted_slack"]) | \
+      set(tasks.TASK_SETS["planted_found"]) == ours
 
 
 def _scripted_trajectory(env, name, steps, valve_angle=None):
