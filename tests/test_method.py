@@ -80,3 +80,14 @@ def test_the_old_path_of_run_still_imports_with_a_warning():
     warnings.simplefilter("always")
     assert api.Run is folder.Run
   assert any(issubclass(w.category, FutureWarning) and "run.folder" in str(w.message) for w in caught)
+
+
+def test_the_env_settings_old_names_still_import_with_a_warning():
+  from discosyn_jax import config
+  from discosyn_jax.env import settings
+
+  for name in ("BACKENDS", "CONTROL_DT"):
+    with pytest.warns(FutureWarning, match=f"env.settings.{name}"):
+      assert getattr(config, name) == getattr(settings, name)
+  with pytest.raises(AttributeError):
+    config.NOT_A_SETTING

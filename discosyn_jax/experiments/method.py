@@ -20,6 +20,7 @@ import re
 from typing import Any
 
 from discosyn_jax.config import OLD_STARTS
+from discosyn_jax.experiments.presets import DECAY  # the decayed update's row (rank)
 
 FAMILIES = ("PPO", "PCA", "AE", "DiscoSyn", "Random", "Prior")
 DECODERS = {"linear": "L", "mlp": "NL"}
@@ -161,32 +162,40 @@ class Method:
     """The method without its residual, tag or freezing: the row it belongs to."""
     return self.replace(tag=(), residual=None, frozen=False, frozen_residual=None)
 
-  def rank(self, decayed: Method | None = None) -> tuple:
+  def rank(self) -> tuple:
     """The report's order: PPO, the fitted spaces (PCA, AE by size), then per number of
     synergies each linear DiscoSyn start above its controls (the reward prior's, the
-    objects prior's, the paper's random start, `decayed` (the preset decay's update)),
-    the random decoder (z bounded, z free), the mlp rows; every other method after, by name."""
+    objects prior's, the paper's random start, the preset decay's update), the random
+    decoder (z bounded, z free), the mlp rows; every other method after, by name."""
     if self != self.plain:
       return (9, self.name)
     if self.family == "PPO":
       return (0,)
     if self.family in ("PCA", "AE") and not self.decoder:
       return (1, self.synergies, FAMILIES.index(self.family))
-    update = (self.start, self.decay, self.decay_steps)
-    updates = [(start, 0.0, 0) for start in (*STARTS, "")] + (
-        [(decayed.start, decayed.decay, decayed.decay_steps)] if decayed else [])
-    rows = {}  # (family, decoder, control, update) -> place in its b's group
-    for slot, each in enumerate(updates):
-      rows[("DiscoSyn", "L", "", each)] = (slot, 0)
-      if each[0] and not each[1]:
-        rows[("Prior", "L", "", each)] = (slot, 1)
-      rows[("Random", "L", "matched", each)] = (slot, 2)
-    paper = ("", 0.0, 0)  # the paper's update: a random start, no decay
-    rows.update({("Random", "L", "", paper): (4, 0), ("Random", "L", "zfree", paper): (4, 1),
-                 ("DiscoSyn", "NL", "", paper): (5, 0), ("Random", "NL", "", paper): (5, 1),
-                 ("Random", "NL", "zfree", paper): (5, 2)})
-    place = rows.get((self.family, self.decoder, self.control, update))
+    place = _ROWS.get((self.family, self.decoder, self.control,
+                       (self.start, self.decay, self.decay_steps)))
     return (2, self.synergies, *place) if place else (9, self.name)
+
+
+def _rows() -> dict[tuple, tuple[int, int]]:
+  """(family, decoder, control, (start, decay, decay steps)) -> its place in its b's group."""
+  paper = ("", 0.0, 0)  # the paper's update: a random start, no decay
+  updates = [(start, 0.0, 0) for start in STARTS] + [
+      paper, ("", DECAY["decoder_weight_decay"], DECAY["decoder_weight_decay_steps"])]
+  rows = {}
+  for slot, each in enumerate(updates):
+    rows[("DiscoSyn", "L", "", each)] = (slot, 0)
+    if each[0]:  # a prior's start frozen
+      rows[("Prior", "L", "", each)] = (slot, 1)
+    rows[("Random", "L", "matched", each)] = (slot, 2)
+  rows.update({("Random", "L", "", paper): (4, 0), ("Random", "L", "zfree", paper): (4, 1),
+               ("DiscoSyn", "NL", "", paper): (5, 0), ("Random", "NL", "", paper): (5, 1),
+               ("Random", "NL", "zfree", paper): (5, 2)})
+  return rows
+
+
+_ROWS = _rows()
 
 
 def _residual(match: re.Match) -> Residual:

@@ -20,13 +20,9 @@ from discosyn_jax.env import hands
 from discosyn_jax.run import folder, layout
 from discosyn_jax.experiments import record
 from discosyn_jax.experiments.method import Method, Residual
-from discosyn_jax.experiments.presets import DECAY
 from discosyn_jax import tasks
 from discosyn_jax.tasks import TASK_SETS
 
-# the decayed update's row, ranked beside the paper's update (Method.rank)
-DECAYED = Method("DiscoSyn", decay=DECAY["decoder_weight_decay"],
-                 decay_steps=DECAY["decoder_weight_decay_steps"])
 MAIN_EXPERIMENTS = ("discosyn", "baselines", "confirm")
 FINAL_K = folder.FINAL_K
 
@@ -150,4 +146,4 @@ def _one_run_per_seed(runs: list[Run]) -> None:
 
 def order(methods) -> list[Method]:
   """Methods in the report's order of rows (Method.rank)."""
-  return sorted(set(methods), key=lambda m: m.rank(DECAYED))
+  return sorted(set(methods), key=Method.rank)
