@@ -1,7 +1,7 @@
 """When each run first finds a task, and what its head did before: why the synergy rows find
 set #2's weight pull and dice later than full-action PPO, read from the records' training
 logs, run by run, with no new training (and the same table for the planted test bed's
-planted_found, studies/planted_lag.py).
+planted_found and planted_reach, studies/planted_lag.py).
 
 Per run and task (the weight pull and the dice by default), from metrics.jsonl (the
 stochastic policy that collects the samples) and eval.jsonl (the deterministic one):
@@ -35,7 +35,7 @@ RECORDS = ("docs/results/paper", "docs/results/residual-set2", "docs/results/set
 # each task's own reward term: what it pays for the motion it asks for
 TERM = {"weight_pull": "reward/lift", "dice": "reward/orientation", "valve3": "reward/turn",
         "screw": "reward/screw", **{f"planted{n}": "reward/reach" for n in range(4)},
-        "planted_found3": "reward/reach"}
+        "planted_found3": "reward/reach", "planted_reach3": "reward/reach"}
 FOUND = 0.8
 
 

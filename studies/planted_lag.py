@@ -1,18 +1,26 @@
 """Does the discriminator's bonus narrow a head while its task pays nothing, and does that
-make the task found later? The cause planted: `planted_found`, three dense tasks of the
-planted span and a fourth that pays only once an action lands near its target
-(discosyn_jax/tasks/planted.py, `paid_within`). Each variant changes one thing of the
-planted preset (DiscoSyn3-L, z bounded, q reading z), trained on the same seeds:
+make the task found later? The cause planted: three dense tasks of the planted span and a
+fourth that pays nothing until it is found (discosyn_jax/tasks/planted.py), in two sets:
+
+  planted_found  the fourth pays only once an action lands near its target (`paid_within`):
+                 pay for precision
+  planted_reach  the fourth pays only for an excursion along its direction (`excursion`):
+                 pay for reach, as set #2's weight pull
+
+Each variant changes one thing of the set's planted preset (DiscoSyn3-L, z bounded, q
+reading z), trained on the same seeds:
 
   default       the preset as it is
   q-activation  q reads back what the decoder read, tanh z (`discriminator_target`)
   zfree         z unbounded: tanh's saturation cannot hide z from q
   no-bonus      alpha2 = 0: no bonus at all (the discriminator still learns)
+  ppo           full-action PPO (the paper's control) at the same size
 
 then finding_lag's table of the found task and a dense one: when each run first reaches 0.8,
 and over the first WINDOW env steps what it was paid, its head's entropy and the bonus.
 
-  python -m studies.planted_lag [--seeds 0 1 2] [--variants ...] [--steps 400] [--out DIR]
+  python -m studies.planted_lag [--set planted_found] [--seeds 0 1 2] [--variants ...]
+                                [--steps 400] [--out DIR]
 
 Each run is the planted preset's 2.05 M env steps (4 tasks), 2-3 min on 2 busy cores; a
 finished run is kept (its record) and read again."""
@@ -23,32 +31,35 @@ import argparse
 import pathlib
 
 VARIANTS = {"default": {}, "q-activation": {"discriminator_target": "activation"},
-            "zfree": {"squash_z": False}, "no-bonus": {"alpha2": 0.0}}
+            "zfree": {"squash_z": False}, "no-bonus": {"alpha2": 0.0}, "ppo": None}
 # each variant's part of its method's name (experiments/method.py)
 NAMED = {"default": {}, "q-activation": {"tag": ("qact",)}, "zfree": {"control": "zfree"},
-         "no-bonus": {"tag": ("alpha2=0",)}}
-PRESET = "planted_found-disco3-linear"
+         "no-bonus": {"tag": ("alpha2=0",)}, "ppo": {}}
+SETS = ("planted_found", "planted_reach")
 
 
-def configs(variants, seeds, steps: int | None = None):
+def configs(variants, seeds, steps: int | None = None, task_set: str = SETS[0]):
   """(folder name, config, experiment.json) of each variant and seed."""
   from discosyn_jax.experiments import presets
   from discosyn_jax.experiments.method import Method
 
-  base = presets.preset(PRESET)
+  base = presets.preset(f"{task_set}-disco3-linear")
+  ppo = base.replace(**presets.PPO)  # full-action PPO at the planted run's size
   if steps is not None:
-    base = base.replace(steps=steps)
+    base, ppo = base.replace(steps=steps), ppo.replace(steps=steps)
   for variant in variants:
     for seed in seeds:
-      config = base.replace(seed=seed, **VARIANTS[variant]).validate()
+      changed = ppo if VARIANTS[variant] is None else base.replace(**VARIANTS[variant])
+      config = changed.replace(seed=seed).validate()
       method = Method.of(config).replace(**NAMED[variant]).name
-      yield (f"{method.lower()}-planted_found-seed{seed}", config,
-             {"experiment": "planted-lag", "method": method, "set": "planted_found",
+      yield (f"{method.lower()}-{task_set}-seed{seed}", config,
+             {"experiment": "planted-lag", "method": method, "set": task_set,
               "seed": seed, "scale": "planted"})
 
 
 def main(argv=None) -> None:
   parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+  parser.add_argument("--set", default=SETS[0], choices=SETS)
   parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
   parser.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
   parser.add_argument("--steps", type=int, help="train steps (default: the preset's 400)")
@@ -60,10 +71,12 @@ def main(argv=None) -> None:
   from studies.finding_lag import print_tables, runs
   from studies.residual_transfer import train_row
 
-  for name, config, meta in configs(args.variants, args.seeds, args.steps):
+  from discosyn_jax.tasks import TASK_SETS
+
+  for name, config, meta in configs(args.variants, args.seeds, args.steps, args.set):
     print(f"[{name}] train", flush=True)
     train_row(args.out, name, config, meta)
-  print_tables(runs([args.out], "planted_found"), ["planted_found3", "planted0"], args.window)
+  print_tables(runs([args.out], args.set), [TASK_SETS[args.set][-1], "planted0"], args.window)
 
 
 if __name__ == "__main__":

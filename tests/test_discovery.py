@@ -118,6 +118,30 @@ def test_the_found_task_pays_nothing_until_an_action_lands_near_its_target():
     tasks.make("planted0", paid_within=1.5)
 
 
+def test_the_reach_task_pays_only_for_an_excursion_along_its_direction():
+  """planted_reach3: nothing short of REACH along the first axis of its plane (a posture at
+  its own target is paid nothing), then a reward rising to 1 over EXCURSION_WIDTH; success
+  from REACH on. Motion across the direction changes nothing."""
+  assert tasks.TASK_SETS["planted_reach"][-1] == "planted_reach3"
+  env = tasks.make("planted_reach3")
+  assert env.config.excursion == registry.REACH > 0
+  direction = planted.task_plane(env.config)[:, 0]
+  across = planted.task_plane(env.config)[:, 1]  # orthogonal to it, inside the plane
+  state = env.reset(jax.random.PRNGKey(5))
+  for reach, reward, success in ((0.9 * registry.REACH, 0.0, 0.0), (registry.REACH + 0.01, 0.02, 1.0),
+                                 (registry.REACH + 0.25, 0.25 / planted.EXCURSION_WIDTH, 1.0),
+                                 (registry.REACH + 2 * planted.EXCURSION_WIDTH, 1.0, 1.0)):
+    for side in (0.0, 0.3):
+      out = env.step(state, jnp.asarray(reach * direction + side * across))
+      assert float(out.reward) == pytest.approx(reward, abs=1e-5)
+      assert float(out.metrics["success"]) == success
+  assert float(env.step(state, state.pipeline_state["target"]).reward) == 0.0
+  with pytest.raises(ValueError, match="excursion"):
+    tasks.make("planted0", excursion=1.0, paid_within=0.5)
+  with pytest.raises(ValueError, match="excursion"):
+    tasks.make("planted0", excursion=-1.0)
+
+
 def test_a_decoder_trained_on_planted_tasks_finds_the_span():
   """The paper's update on one planted task that needs the whole span: the decoder's
   overlap with it climbs from chance to near 1 (96 k env steps, a few seconds after the

@@ -89,11 +89,16 @@ def test_the_planted_lag_study_trains_its_variants_and_reads_them(tmp_path, caps
 
   lag = study("planted_lag")
   made = {meta["method"]: config for _, config, meta in lag.configs(list(lag.VARIANTS), [0])}
-  assert set(made) == {"DiscoSyn3-L", "DiscoSyn3-L-qact", "DiscoSyn3-L-zfree", "DiscoSyn3-L-alpha2=0"}
+  assert set(made) == {"DiscoSyn3-L", "DiscoSyn3-L-qact", "DiscoSyn3-L-zfree", "DiscoSyn3-L-alpha2=0",
+                       "PPO"}
+  assert made["PPO"].decoder == "identity" and made["PPO"].steps == made["DiscoSyn3-L"].steps
   assert all(Method.parse(name).name == name for name in made)
   assert made["DiscoSyn3-L-qact"].discriminator_target == "activation"
   assert not made["DiscoSyn3-L-zfree"].squash_z and made["DiscoSyn3-L-alpha2=0"].alpha2 == 0.0
   assert made["DiscoSyn3-L"].tasks[-1] == "planted_found3"
+  reach = {meta["method"]: config for _, config, meta in lag.configs(["default"], [0], None,
+                                                                      "planted_reach")}
+  assert reach["DiscoSyn3-L"].tasks[-1] == "planted_reach3"
   lag.main(["--seeds", "0", "--variants", "default", "no-bonus", "--steps", "4",
             "--out", str(tmp_path)])
   out = capsys.readouterr().out

@@ -29,6 +29,13 @@ u_1 w_n, w_n a unit direction orthogonal to the span, the task's own (u_1 the go
 coordinate, s keeping |a*| <= 0.9). No decoder of the span, and no constant posture, reaches
 it: the motion a residual beside the synergies is for (agent/residual.py). Its share of the
 target's power is outside^2 / (task_rank + outside^2).
+
+With `excursion` > 0 the task pays only for reach, not for a posture: with r = clip(a, -1, 1)
+. d_n, d_n the first axis of the task's plane (a unit direction inside the span), the reward
+is clip((r - excursion) / EXCURSION_WIDTH, 0, 1), and success is r >= excursion. Nothing is
+paid until the policy makes that excursion, and a narrower one is paid nothing at all: as
+set #2's weight pull pays nothing until the pull is strong enough to lift the weight. The
+goal is still observed and asks for nothing.
 """
 
 from __future__ import annotations
@@ -47,6 +54,7 @@ from discosyn_jax import checks
 SPAN_SEED = 26  # fixed; changing it plants another span in every run
 ACTION_SIZE = 20
 MAX_TARGET = 0.9  # the largest action a target asks for
+EXCURSION_WIDTH = 0.5  # an excursion task's reward rises from 0 to 1 over this much more reach
 
 
 @dataclasses.dataclass(frozen=True)
@@ -63,6 +71,9 @@ class PlantedConfig:
   # the reward is paid only where the error is below this fraction of a typical target
   # (0: everywhere, the dense reward)
   paid_within: float = 0.0
+  # the task pays only for the action's part along its own direction beyond this (0: a
+  # posture task; module docstring)
+  excursion: float = 0.0
   span_seed: int = SPAN_SEED
 
   def __post_init__(self):
@@ -78,6 +89,11 @@ class PlantedConfig:
       raise ValueError(f"outside must not be negative, not {self.outside}")
     if not 0 <= self.paid_within <= 1:
       raise ValueError(f"paid_within must be between 0 and 1 (0: paid everywhere), not {self.paid_within}")
+    if self.excursion < 0:
+      raise ValueError(f"excursion must not be negative, not {self.excursion}")
+    if self.excursion and (self.slack or self.outside or self.paid_within):
+      raise ValueError("an excursion task pays for reach alone: slack, outside and paid_within "
+                       "shape a posture task's pay, set them to 0")
     if self.outside and self.slack:
       raise ValueError("with slack the error outside the span counts for nothing: a target "
                        "outside it (outside > 0) would ask for nothing")
@@ -127,6 +143,7 @@ class PlantedEnv(Env):
     # E|a*|^2 for u ~ U[-1, 1]^k: the columns of _targets are orthogonal, each u_j has variance 1/3
     self._target_power = float((np.asarray(self._targets) ** 2).sum() / 3)
     self._projector = jnp.asarray(self.planted_span @ self.planted_span.T)
+    self._direction = jnp.asarray(task_plane(config)[:, 0])  # what an excursion task pays along
 
   @property
   def observation_size(self) -> int:
@@ -148,6 +165,8 @@ class PlantedEnv(Env):
                  done=zero, metrics=metrics, info={})
 
   def step(self, state: State, action: jax.Array) -> State:
+    if self.config.excursion:
+      return self._excursion_step(state, action)
     error = jnp.clip(action, -1.0, 1.0) - state.pipeline_state["target"]
     if self.config.slack:
       error = self._projector @ error
@@ -156,5 +175,12 @@ class PlantedEnv(Env):
     if self.config.paid_within:  # nothing paid until the action is near its target
       reward = jnp.where(power < self.config.paid_within ** 2 * self._target_power, reward, 0.0)
     success = (power < self.config.tolerance ** 2 * self._target_power).astype(jnp.float32)
+    metrics = {**state.metrics, "success": success, "reward/reach": reward}
+    return state.replace(reward=reward, metrics=metrics)
+
+  def _excursion_step(self, state: State, action: jax.Array) -> State:
+    reach = jnp.clip(action, -1.0, 1.0) @ self._direction
+    reward = jnp.clip((reach - self.config.excursion) / EXCURSION_WIDTH, 0.0, 1.0)
+    success = (reach >= self.config.excursion).astype(jnp.float32)
     metrics = {**state.metrics, "success": success, "reward/reach": reward}
     return state.replace(reward=reward, metrics=metrics)

@@ -32,21 +32,29 @@ class Entry:
   env: Callable[..., Env] = HandEnv
 
 
-def _planted(index: int, slack: bool, paid_within: float = 0.0) -> Entry:
+def _planted(index: int, slack: bool, paid_within: float = 0.0, excursion: float = 0.0) -> Entry:
   what = "only the error inside the span counts" if slack else "the whole error counts"
   if paid_within:
     what += f"; paid only within {paid_within:g} of a typical target"
+  summary = f"reach a posture in plane {index} of the planted 3-D span; {what}"
+  if excursion:
+    summary = (f"reach beyond {excursion:g} along the first axis of plane {index} of the "
+               "planted 3-D span; paid nothing short of it")
   return Entry(lambda config: config,  # the env is built from the config itself
-               lambda **kw: planted.default_config(index=index, slack=slack,
-                                                   paid_within=paid_within, **kw),
-               f"reach a posture in plane {index} of the planted 3-D span; {what}",
-               env=planted.PlantedEnv)
+               lambda **kw: planted.default_config(index=index, slack=slack, paid_within=paid_within,
+                                                   excursion=excursion, **kw),
+               summary, env=planted.PlantedEnv)
 
 
 # planted_found3: no reward until the error is below 0.7 of a typical target's size; the
 # initial decoder's noise (std 0.3 on 20 actuators) alone is larger, so the task is first
 # paid once the dense tasks have narrowed it (std ~0.2: a quarter of the steps at the target)
 PAID_WITHIN = 0.7
+# planted_reach3: paid only where the action reaches 1.0 along the task's direction: within
+# what plane 2's dense targets ask along it (up to 1.46; planes 0 and 1: 0.40, 0.91), so a
+# decoder serving the dense tasks reaches it; at the start 1.8-2.0 % of PPO's samples and
+# 0.1-8 % of the synergy preset's (seeds 0-2) reach it, set before any run (2026-12-06)
+REACH = 1.0
 REGISTRY: dict[str, Entry] = {
     "valve0": Entry(valve.Valve, lambda **kw: valve.default_config(arms=0, **kw),
                     "turn a bare vertical stem counter-clockwise"),
@@ -86,6 +94,8 @@ REGISTRY: dict[str, Entry] = {
     **{f"planted_slack{n}": _planted(n, slack=True) for n in range(4)},
     # a task of the bed that pays nothing until it is found (planted_found's fourth)
     "planted_found3": _planted(3, slack=False, paid_within=PAID_WITHIN),
+    # a task of the bed paid only for an excursion (planted_reach's fourth)
+    "planted_reach3": _planted(3, slack=False, excursion=REACH),
 }
 
 # The "fast" physics profile: each task's cheapest setting that stayed within the tolerances

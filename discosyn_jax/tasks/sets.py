@@ -10,6 +10,8 @@ TASK_SETS: dict[str, tuple[str, ...]] = {
     "sparse": ("valve_goal",),
     "planted": tuple(f"planted{n}" for n in range(4)),
     "planted_slack": tuple(f"planted_slack{n}" for n in range(4)),
-    # three dense tasks and one that pays only once found: what exploration does before it is
+    # three dense tasks and one that pays only once found (near its target; for an excursion):
+    # what exploration does before it is
     "planted_found": ("planted0", "planted1", "planted2", "planted_found3"),
+    "planted_reach": ("planted0", "planted1", "planted2", "planted_reach3"),
 }
