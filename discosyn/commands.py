@@ -105,7 +105,7 @@ TRAIN_FLAGS = {
     "decoder_init": "decoder_init", "freeze_decoder": "freeze_decoder", "squash_z": "squash_z",
     "discriminator_target": "discriminator_target", "task_posture": "task_posture",
     "residual": "residual", "residual_ramp": "residual_ramp", "residual_start": "residual_start",
-    "closing_episodes": "closing_episodes",
+    "closing_episodes": "closing_episodes", "z_std_floor": "z_std_floor",
 }
 
 

@@ -46,7 +46,7 @@ ADDED = {"squash_z": False, "physics": "reference", "reset_pool": False, "decode
          "decoder_weight_decay_steps": 0, "hand": "shadow20",
          "decoder_init": "random", "discriminator_target": "z", "task_posture": False,
          "residual": 0.0, "residual_ramp": 0.0, "residual_start": 0.0,
-         "init_residual_std": 0.05, "closing_episodes": 0}
+         "init_residual_std": 0.05, "closing_episodes": 0, "z_std_floor": 0.0}
 # Fields renamed since a release, read by what they became: the residual's schedule was in
 # train steps until 2026-12-05 and is a share of the run's `steps` since (the same run)
 RENAMED = {"residual_ramp_steps": "residual_ramp", "residual_start_steps": "residual_start"}
@@ -126,6 +126,10 @@ class TrainConfig:
   decoder_hidden: tuple[int, ...] = (128, 128)  # mlp decoder only
   discriminator_hidden: tuple[int, ...] = (128, 128)
   init_z_std: float = 1.0  # initial std of pi(z|s,n)
+  # a floor on each head's z std, held until its task's training rollouts first succeed (a
+  # tenth of the episodes that end in one rollout): the discriminator's bonus cannot narrow
+  # a head before its task has paid it anything (0: no floor)
+  z_std_floor: float = 0.0
   init_action_std: float = 0.3  # initial std of p(a|z)
   # -- PPO --
   num_envs: int = 64  # parallel envs per task
@@ -235,7 +239,7 @@ class TrainConfig:
       raise ValueError(f"steps must be at most {MAX_STEPS}, not {self.steps}")
     for name in ("eval_every", "checkpoint_every", "alpha1", "alpha2", "alpha3", "value_coef",
                  "decoder_weight_decay", "decoder_weight_decay_steps", "residual_ramp",
-                 "residual_start", "closing_episodes"):
+                 "residual_start", "closing_episodes", "z_std_floor"):
       if getattr(self, name) < 0:
         raise ValueError(f"{name} must not be negative, not {getattr(self, name)}")
     for name in ("policy_hidden", "value_hidden", "decoder_hidden", "discriminator_hidden"):
@@ -306,6 +310,14 @@ def renamed(values: dict[str, Any]) -> dict[str, Any]:
   return values
 
 
+def with_added(values: dict[str, Any]) -> tuple[dict[str, Any], list[str]]:
+  """(the fields of an older release's config under today's names, with those added since
+  (ADDED) at the values that release ran; the names of the added)."""
+  values = renamed(values)
+  added = [k for k in ADDED if k not in values]
+  return {**values, **{k: ADDED[k] for k in added}}, added
+
+
 def save(config: TrainConfig, path) -> None:
   atomic.write_text(path, json.dumps(config.validate().to_dict(), indent=1))
 
@@ -340,9 +352,7 @@ def upgrade(path) -> list[str]:
   if not isinstance(values, dict):
     raise ValueError(f"malformed config file {path}: not a JSON object")
   renames = [old for old in RENAMED if old in values]
-  values = renamed(values)
-  added = [k for k in ADDED if k not in values]
-  upgraded = {**values, **{k: ADDED[k] for k in added}}
+  upgraded, added = with_added(values)
   try:  # the rest must be whole already
     TrainConfig.from_dict(upgraded).validate()
   except (TypeError, ValueError) as err:

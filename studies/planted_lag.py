@@ -6,6 +6,7 @@ fourth that pays nothing until it is found (discosyn_jax/tasks/planted.py), in t
                  pay for precision
   planted_reach  the fourth pays only for an excursion along its direction (`excursion`):
                  pay for reach, as set #2's weight pull
+  planted_far    as planted_reach, further (near the corner of z's box)
 
 Each variant changes one thing of the set's planted preset (DiscoSyn3-L, z bounded, q
 reading z), trained on the same seeds:
@@ -14,6 +15,9 @@ reading z), trained on the same seeds:
   q-activation  q reads back what the decoder read, tanh z (`discriminator_target`)
   zfree         z unbounded: tanh's saturation cannot hide z from q
   no-bonus      alpha2 = 0: no bonus at all (the discriminator still learns)
+  floor         each head's z std held at >= 0.7 until its task's rollouts first succeed
+                (`z_std_floor`; 0.7 = 1.06 nat per dimension: in finding_lag's set #2 table
+                every head that kept >= 1.0 found the weight pull)
   ppo           full-action PPO (the paper's control) at the same size
 
 then finding_lag's table of the found task and a dense one: when each run first reaches 0.8,
@@ -30,12 +34,14 @@ from __future__ import annotations
 import argparse
 import pathlib
 
+FLOOR = 0.7
 VARIANTS = {"default": {}, "q-activation": {"discriminator_target": "activation"},
-            "zfree": {"squash_z": False}, "no-bonus": {"alpha2": 0.0}, "ppo": None}
+            "zfree": {"squash_z": False}, "no-bonus": {"alpha2": 0.0},
+            "floor": {"z_std_floor": FLOOR}, "ppo": None}
 # each variant's part of its method's name (experiments/method.py)
 NAMED = {"default": {}, "q-activation": {"tag": ("qact",)}, "zfree": {"control": "zfree"},
-         "no-bonus": {"tag": ("alpha2=0",)}, "ppo": {}}
-SETS = ("planted_found", "planted_reach")
+         "no-bonus": {"tag": ("alpha2=0",)}, "floor": {}, "ppo": {}}  # Method.of names the floor
+SETS = ("planted_found", "planted_reach", "planted_far")
 
 
 def configs(variants, seeds, steps: int | None = None, task_set: str = SETS[0]):

@@ -3,6 +3,7 @@ evaluation), confirmation plans (experiments/confirm.py) and the residual's sche
 share of the run."""
 
 import json
+import pathlib
 
 import numpy as np
 import pytest
@@ -15,6 +16,7 @@ from discosyn_jax.experiments.method import Method
 from discosyn_jax.run import folder, layout
 from discosyn_jax.training import loop
 from discosyn_jax.training.trainer import Trainer
+from tests.helpers import ROOT
 from tests.toy_env import ReachAction
 
 TOY = TrainConfig(tasks=("a", "b"), n_synergies=2, policy_hidden=(16, 16), value_hidden=(16, 16),
@@ -115,6 +117,20 @@ def tiny_plan(**changes):
           "decision": "nothing follows."}
   plan.update(changes)
   return plan
+
+
+def test_a_plan_written_before_a_field_was_added_runs_with_its_value_of_then(tmp_path):
+  """A committed plan is never rewritten: a field added since (config.ADDED) takes the value
+  every run had before it, as `discosyn upgrade` gives an older run's config."""
+  plan = tiny_plan()
+  for row in plan["rows"]:
+    del row["config"]["z_std_floor"]
+  (tmp_path / "plan.json").write_text(json.dumps(plan))
+  loaded = confirm.load(tmp_path / "plan.json")
+  assert [row.config.z_std_floor for row in loaded.rows] == [config_lib.ADDED["z_std_floor"]] * 2
+  assert [row.config for row in loaded.rows] == [row.config for row in confirm.parse(tiny_plan()).rows]
+  committed = confirm.load(pathlib.Path(ROOT) / "docs/results/confirm-late-residual/plan.json")
+  assert len(committed.rows) == 9 and all(r.config.z_std_floor == 0.0 for r in committed.rows)
 
 
 def test_a_plan_runs_exactly_its_rows_and_refuses_a_run_that_differs(tmp_path, capsys):

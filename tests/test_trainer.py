@@ -137,6 +137,46 @@ def test_frozen_decoder_is_unchanged_and_heads_learn():
   assert all(jax.tree.leaves(changed))
 
 
+class AlwaysSucceeds(ReachAction):
+  """ReachAction whose every step counts as a success."""
+
+  def step(self, state, action):
+    out = super().step(state, action)
+    return out.replace(metrics={**out.metrics, "success": jnp.ones(())})
+
+
+def _head_stds(state, n_tasks: int = 2) -> np.ndarray:
+  return np.stack([np.exp(jax.device_get(state.params["params"][f"heads_{n}"]["log_std"]))
+                   for n in range(n_tasks)])
+
+
+def test_a_floored_head_keeps_its_z_std_until_its_task_succeeds():
+  """z_std_floor: while a task has not succeeded its head's z std stays at the floor, where
+  the bonus narrows it below without one; a task that succeeds in its first rollout is never
+  held (its run is the run without the floor, number for number), and `found` says so."""
+  narrowing = dict(alpha2=1.0, alpha1=0.0)  # a strong bonus: the heads narrow at once
+  free, held = two_task_trainer(**narrowing), two_task_trainer(**narrowing, z_std_floor=1.0)
+  assert held.init().found.shape == (2,) and free.init().found.shape == (0,)
+  states = {"free": free.init(), "held": held.init()}
+  for _ in range(4):
+    states["free"], _ = free.train_step(states["free"])
+    states["held"], metrics = held.train_step(states["held"])
+  assert _head_stds(states["free"]).min() < 0.97
+  assert _head_stds(states["held"]).min() == pytest.approx(1.0)
+  assert not bool(metrics["a/found"]) and not bool(metrics["b/found"])
+
+  config = TrainConfig(tasks=("a", "b"), **{**SMALL, "n_synergies": 2, **narrowing})
+  envs = [AlwaysSucceeds(TARGET), AlwaysSucceeds(-TARGET, obs_size=5)]
+  plain, floored = Trainer(config, envs), Trainer(config.replace(z_std_floor=2.0), envs)
+  a, b = plain.init(), floored.init()
+  for _ in range(3):
+    a, _ = plain.train_step(a)
+    b, metrics = floored.train_step(b)
+  assert bool(metrics["a/found"]) and bool(metrics["b/found"])
+  jax.tree.map(np.testing.assert_array_equal, jax.device_get(a.params), jax.device_get(b.params))
+  assert _head_stds(b).max() < 2.0  # the floor above the start was never applied
+
+
 def test_a_given_decoder_is_installed_and_a_misfit_refused():
   trainer = two_task_trainer(freeze_decoder=True)
   decoder = trainer.init(seed=7).params["params"]["synergy_decoder"]

@@ -213,6 +213,19 @@ def role(name: str) -> str:
   raise ValueError(f"parameter collection {name!r} has no role")
 
 
+def floor_head_std(params, held: jax.Array, floor: float):
+  """`params` with the z log std of each head whose task is `held` (bool per task) raised to
+  at least log(floor): a projection after the update, so that the std the next rollout
+  samples with, and the one the optimiser goes on from, are the same."""
+  inner = dict(params["params"])
+  for n in range(held.shape[0]):
+    head = dict(inner[f"heads_{n}"])
+    head["log_std"] = jnp.where(held[n], jnp.maximum(head["log_std"], math.log(floor)),
+                                head["log_std"])
+    inner[f"heads_{n}"] = head
+  return {**params, "params": inner}
+
+
 def split_seed_key(key, n_tasks: int):
   """(the state's rng, the parameters' key, a reset key per task): what `Trainer.init` draws
   from the key of its seed."""

@@ -149,7 +149,8 @@ def _row(values: dict[str, Any]) -> Row:
   if "seed" in fields:
     raise ValueError(f"row {name}: its config gives no seed (the row's seeds do)")
   try:
-    config = TrainConfig.from_dict({**fields, "seed": seeds[0]}).validate()
+    # a plan written before a field was added ran with that field's value of then
+    config = TrainConfig.from_dict(config_lib.with_added({**fields, "seed": seeds[0]})[0]).validate()
   except (TypeError, ValueError) as err:
     raise ValueError(f"row {name}: {err}") from None
   return Row(name, tuple(seeds), config)

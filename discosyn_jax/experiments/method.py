@@ -9,7 +9,8 @@ A name, part by part: the family and its number of synergies ('DiscoSyn3'); the 
 decoder that copies a learned run's update (the parts after it are that run's); the
 decoder's start where not random ('-reward', '-objects'); its weight decay ('-wd8a200':
 8, falling to nothing over 200 train steps); '-zfree' where the heads' z is unbounded; a
-study's own label parts ('-alpha3=0.1'); a residual beside the synergies ('-res0.3r150s400':
+study's own label parts ('-alpha3=0.1') and a floor on the heads' z std until found
+('-zfloor0.7'); a residual beside the synergies ('-res0.3r150s400':
 its cap, ramp and start in the run's train steps); and ' frozen' for that space frozen and
 used on other tasks, with the residual it acts with there ('... frozen-res0.3r150')."""
 
@@ -142,8 +143,10 @@ class Method:
     (Random, Prior) or learned (DiscoSyn). `-zfree`, `-matched` and ` frozen` are the
     planner's to add: a config alone does not say which control it is."""
     get = _getter(source)
+    floor = get("z_std_floor", 0.0) or 0.0  # the heads held open until found
+    tag = (f"zfloor{floor:g}",) if floor else ()
     if get("decoder") == "identity":
-      return cls("PPO")
+      return cls("PPO", tag=tag)
     if get("method"):  # a fitted space: PCA, AE
       return cls(get("method"), get("n_synergies"))
     init = get("decoder_init", "random") or "random"
@@ -155,7 +158,7 @@ class Method:
     return cls(family, get("n_synergies"), DECODERS[get("decoder")],
                start="" if init == "random" else init, decay=decay,
                decay_steps=(get("decoder_weight_decay_steps", 0) or 0) if decay else 0,
-               residual=Residual.of(source))
+               tag=tag, residual=Residual.of(source))
 
   @property
   def plain(self) -> Method:

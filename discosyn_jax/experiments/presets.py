@@ -93,8 +93,8 @@ for _set, _sizes in (("set1", (3, 4)), ("set2", (4, 6))):
 
 # DiscoSyn3 on the planted test bed: (a) one adequate subspace, (b) many, (c) as (a) with one
 # task that pays only once it is found: near its target (planted_found), for an excursion
-# (planted_reach)
-for _set in ("planted", "planted_slack", "planted_found", "planted_reach"):
+# (planted_reach, planted_far: further)
+for _set in ("planted", "planted_slack", "planted_found", "planted_reach", "planted_far"):
   _tasks = TASK_SETS[_set]
   for _kind in ("linear", "mlp"):
     PRESETS[f"{_set}-disco3-{_kind}"] = TrainConfig(tasks=_tasks, n_synergies=3, decoder=_kind,

@@ -14,4 +14,5 @@ TASK_SETS: dict[str, tuple[str, ...]] = {
     # what exploration does before it is
     "planted_found": ("planted0", "planted1", "planted2", "planted_found3"),
     "planted_reach": ("planted0", "planted1", "planted2", "planted_reach3"),
+    "planted_far": ("planted0", "planted1", "planted2", "planted_far3"),
 }
