@@ -118,19 +118,20 @@ def test_the_found_task_pays_nothing_until_an_action_lands_near_its_target():
     tasks.make("planted0", paid_within=1.5)
 
 
-def test_the_reach_task_pays_only_for_an_excursion_along_its_direction():
-  """planted_reach3: nothing short of REACH along the first axis of its plane (a posture at
-  its own target is paid nothing), then a reward rising to 1 over EXCURSION_WIDTH; success
-  from REACH on. Motion across the direction changes nothing."""
-  assert tasks.TASK_SETS["planted_reach"][-1] == "planted_reach3"
-  env = tasks.make("planted_reach3")
-  assert env.config.excursion == registry.REACH > 0
+@pytest.mark.parametrize("task_set,reach", [("planted_reach", registry.REACH),
+                                            ("planted_far", registry.REACH_FAR)])
+def test_the_reach_task_pays_only_for_an_excursion_along_its_direction(task_set, reach):
+  """planted_reach3 / planted_far3: nothing short of their reach along the first axis of the
+  plane (a posture at its own target is paid nothing), then a reward rising to 1 over
+  EXCURSION_WIDTH; success from the reach on. Motion across the direction changes nothing."""
+  env = tasks.make(tasks.TASK_SETS[task_set][-1])
+  assert env.config.excursion == reach > 0
   direction = planted.task_plane(env.config)[:, 0]
   across = planted.task_plane(env.config)[:, 1]  # orthogonal to it, inside the plane
   state = env.reset(jax.random.PRNGKey(5))
-  for reach, reward, success in ((0.9 * registry.REACH, 0.0, 0.0), (registry.REACH + 0.01, 0.02, 1.0),
-                                 (registry.REACH + 0.25, 0.25 / planted.EXCURSION_WIDTH, 1.0),
-                                 (registry.REACH + 2 * planted.EXCURSION_WIDTH, 1.0, 1.0)):
+  for reach, reward, success in ((0.9 * reach, 0.0, 0.0), (reach + 0.01, 0.02, 1.0),
+                                 (reach + 0.25, 0.25 / planted.EXCURSION_WIDTH, 1.0),
+                                 (reach + 2 * planted.EXCURSION_WIDTH, 1.0, 1.0)):
     for side in (0.0, 0.3):
       out = env.step(state, jnp.asarray(reach * direction + side * across))
       assert float(out.reward) == pytest.approx(reward, abs=1e-5)

@@ -34,7 +34,8 @@ def test_task_sets():
           if not isinstance(entry.env, tasks.registry._Whole)}
   assert set(NEW) | {"valve_goal_dense", "dice_full"} | set(tasks.TASK_SETS["set1"]) | \
       set(tasks.TASK_SETS["planted"]) | set(tasks.TASK_SETS["planted_slack"]) | \
-      set(tasks.TASK_SETS["planted_found"]) | set(tasks.TASK_SETS["planted_reach"]) == ours
+      set(tasks.TASK_SETS["planted_found"]) | set(tasks.TASK_SETS["planted_reach"]) | \
+      set(tasks.TASK_SETS["planted_far"]) == ours
 
 
 def _scripted_trajectory(env, name, steps, valve_angle=None):
