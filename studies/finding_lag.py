@@ -14,6 +14,9 @@ stochastic policy that collects the samples) and eval.jsonl (the deterministic o
   H/dim      the head's entropy per dimension of what it samples (z for a synergy row, the
              20 actions for PPO) at the start and at the end of the window: how much the head
              still explores
+  share      the task's share of the decoder's gradient over the window (decoder_share;
+             '-' for PPO and for records from before it was logged): how much the task
+             shapes the shared synergies while it is not yet found
   bonus      the discriminator bonus alpha2 log q(z|a) per step over the window (0 for PPO),
              beside `paid`: whether the bonus outweighs what the task pays
 
@@ -77,6 +80,7 @@ def summary(run, task: str, window: int) -> dict:
               paid=float(np.mean([r[term_key] for r in rows if term_key in r])),
               h_start=entropy_per_dim(run, task, rows[0]),
               h_end=entropy_per_dim(run, task, rows[-1]),
+              share=_mean_of(rows, f"{task}/decoder_share"),
               bonus=float(np.mean([r.get(f"{task}/bonus", 0.0) for r in rows])))
 
 
@@ -97,21 +101,28 @@ def main(argv=None) -> None:
   print_tables(runs(args.folders, args.set), args.tasks, args.window)
 
 
+def _mean_of(rows, key: str) -> float | None:
+  values = [r[key] for r in rows if key in r]
+  return float(np.mean(values)) if values else None
+
+
 def print_tables(found: list, task_names, window: int) -> None:
   from discosyn_jax.experiments.report_runs import order
 
   for task in task_names:
     print(f"\n{task}: found = env steps to evaluated success {FOUND}; end = success at the "
           f"end; over the first {window:,} env steps: paid = mean {term(task)} per step, H/dim = the head's "
-          "entropy per dimension at its start and end, bonus = alpha2 log q per step\n")
-    print("| method | seed | found | end | paid | H/dim start -> end | bonus |")
-    print("|---|---|---|---|---|---|---|")
+          "entropy per dimension at its start and end, share = its share of the decoder's "
+          "gradient, bonus = alpha2 log q per step\n")
+    print("| method | seed | found | end | paid | H/dim start -> end | share | bonus |")
+    print("|---|---|---|---|---|---|---|---|")
     for method in order({r.method for r in found}):
       for run in sorted((r for r in found if r.method == method), key=lambda r: r.seed):
         s = summary(run, task, window)
         at = "-" if s["found"] is None else f"{s['found'] / 1e6:.2f} M"
+        share = "-" if s["share"] is None else f"{s['share']:.2f}"
         print(f"| {method} | {run.seed} | {at} | {s['end']:.2f} | {s['paid']:.4f} | "
-              f"{s['h_start']:.2f} -> {s['h_end']:.2f} | {s['bonus']:.4f} |")
+              f"{s['h_start']:.2f} -> {s['h_end']:.2f} | {share} | {s['bonus']:.4f} |")
 
 
 if __name__ == "__main__":

@@ -6,7 +6,7 @@ import numpy as np
 import optax
 import pytest
 
-from discosyn_jax.agent import networks, ppo
+from discosyn_jax.agent import networks, policy, ppo
 from discosyn_jax.agent.networks import DiscoSyn
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.training.trainer import Trainer, _episode_metrics
@@ -175,6 +175,28 @@ def test_a_floored_head_keeps_its_z_std_until_its_task_succeeds():
   assert bool(metrics["a/found"]) and bool(metrics["b/found"])
   jax.tree.map(np.testing.assert_array_equal, jax.device_get(a.params), jax.device_get(b.params))
   assert _head_stds(b).max() < 2.0  # the floor above the start was never applied
+
+
+def test_each_tasks_share_of_the_decoders_gradient():
+  """decoder_share: a task whose samples carry no advantage gives the decoder nothing (its
+  share 0, the other's 1); in a train step the shares are logged per task and sum to 1;
+  nothing is logged where the decoder does not learn."""
+  trainer = two_task_trainer()
+  params = trainer.init().params
+  keys = jax.random.split(jax.random.PRNGKey(3), 2)
+  paid, unpaid = random_samples(keys[0], 3, b=2), random_samples(keys[1], 5, b=2)
+  # drawn by the policy as it is (ratio 1), the unpaid task with no advantage at all
+  on_policy = lambda n, s: s.replace(log_prob=policy.log_prob(trainer.model, params, n, s.obs, s.z,
+                                                              s.action)[0])
+  paid = on_policy(0, paid)
+  unpaid = on_policy(1, unpaid).replace(advantage=jnp.zeros_like(unpaid.advantage))
+  shares = [float(x) for x in trainer._decoder_shares(params, [paid, unpaid], None)]
+  assert shares == pytest.approx([1.0, 0.0])
+  _, metrics = trainer.train_step(trainer.init())
+  got = [float(metrics[f"{task}/decoder_share"]) for task in ("a", "b")]
+  assert sum(got) == pytest.approx(1.0) and min(got) > 0
+  frozen = two_task_trainer(freeze_decoder=True)
+  assert "a/decoder_share" not in frozen.train_step(frozen.init())[1]
 
 
 def test_a_given_decoder_is_installed_and_a_misfit_refused():

@@ -229,6 +229,9 @@ class Trainer:
       metrics.update({f"{name}/{k}": v for k, v in _episode_metrics(traj, log_q, cfg.alpha2).items()})
       own_values[name] = _finite_values(traj, env_state.obs)
 
+    if self.model.has_discriminator and not cfg.freeze_decoder:
+      metrics.update({f"{name}/decoder_share": share for name, share in
+                      zip(cfg.tasks, self._decoder_shares(params, samples, rho))})
     params, opt_state, loss_metrics = self._update(params, state.opt_state, samples, update_key,
                                                    rho)
     if rho is not None:
@@ -259,6 +262,22 @@ class Trainer:
     residual's (rho times its mean)."""
     synergy, res = policy.action_parts(self.model, params, task, obs, z, rho)
     return {"action_synergy": jnp.abs(synergy).mean(), "action_residual": jnp.abs(res).mean()}
+
+  def _decoder_shares(self, params, samples: list[ppo.Samples], rho) -> list[jax.Array]:
+    """Each task's share of the decoder's gradient, |g_n| / sum_m |g_m| with g_n the gradient
+    of task n's PPO loss on the decoder, at the update's start, on the first minibatch's worth
+    of its samples (a sixteenth of the update's gradient work at the default sizes): which
+    tasks shape the shared synergies while the others are not yet paid."""
+    size = samples[0].obs.shape[0] // self.config.num_minibatches
+
+    def norm(n: int):
+      part = jax.tree.map(lambda x: x[:size], samples[n])
+      grads = jax.grad(lambda p: ppo.task_loss(self.model, p, n, part, self.config, rho)[0])(params)
+      return optax.tree.norm(grads["params"]["synergy_decoder"])
+
+    norms = [norm(n) for n in range(len(samples))]
+    total = sum(norms) + 1e-12
+    return [x / total for x in norms]
 
   def _update(self, params, opt_state, samples: list[ppo.Samples], key, rho=None):
     """`update_epochs` passes of `num_minibatches` optimiser steps over every task's samples
