@@ -126,9 +126,9 @@ class TrainConfig:
   decoder_hidden: tuple[int, ...] = (128, 128)  # mlp decoder only
   discriminator_hidden: tuple[int, ...] = (128, 128)
   init_z_std: float = 1.0  # initial std of pi(z|s,n)
-  # a floor on each head's z std, held until its task's training rollouts first succeed (a
-  # tenth of the episodes that end in one rollout): the discriminator's bonus cannot narrow
-  # a head before its task has paid it anything (0: no floor)
+  # a floor on each head's z std, held until its task first pays a training rollout (a
+  # reward of at least 0.01 at some step): the discriminator's bonus cannot narrow a head
+  # before its task has paid it anything; a dense task is paid at once (0: no floor)
   z_std_floor: float = 0.0
   init_action_std: float = 0.3  # initial std of p(a|z)
   # -- PPO --

@@ -1,5 +1,5 @@
-"""Does holding each head's z std open until its task first succeeds let the synergy rows find
-set #2's weight pull as soon as full-action PPO? finding_lag's set #2 table split the runs by
+"""Does holding each head's z std open until its task first pays a rollout let the synergy
+rows find set #2's weight pull as soon as full-action PPO? finding_lag's set #2 table split the runs by
 their weight pull head: every head that kept >= 1.0 nat per dimension over the first 0.5 M
 env steps found it (0.19-0.77 M), most that narrowed below found it late or never. This
 trains the confirmation plan's set #2 default row (DiscoSyn6-L-reward, `cpu` size, fast

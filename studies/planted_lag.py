@@ -15,7 +15,7 @@ reading z), trained on the same seeds:
   q-activation  q reads back what the decoder read, tanh z (`discriminator_target`)
   zfree         z unbounded: tanh's saturation cannot hide z from q
   no-bonus      alpha2 = 0: no bonus at all (the discriminator still learns)
-  floor         each head's z std held at >= 0.7 until its task's rollouts first succeed
+  floor         each head's z std held at >= 0.7 until its task first pays a rollout
                 (`z_std_floor`; 0.7 = 1.06 nat per dimension: in finding_lag's set #2 table
                 every head that kept >= 1.0 found the weight pull)
   ppo           full-action PPO (the paper's control) at the same size

@@ -137,12 +137,11 @@ def test_frozen_decoder_is_unchanged_and_heads_learn():
   assert all(jax.tree.leaves(changed))
 
 
-class AlwaysSucceeds(ReachAction):
-  """ReachAction whose every step counts as a success."""
+class PaysNothing(ReachAction):
+  """ReachAction whose reward is always 0: a task not yet found."""
 
   def step(self, state, action):
-    out = super().step(state, action)
-    return out.replace(metrics={**out.metrics, "success": jnp.ones(())})
+    return super().step(state, action).replace(reward=jnp.zeros(()))
 
 
 def _head_stds(state, n_tasks: int = 2) -> np.ndarray:
@@ -150,29 +149,31 @@ def _head_stds(state, n_tasks: int = 2) -> np.ndarray:
                    for n in range(n_tasks)])
 
 
-def test_a_floored_head_keeps_its_z_std_until_its_task_succeeds():
-  """z_std_floor: while a task has not succeeded its head's z std stays at the floor, where
-  the bonus narrows it below without one; a task that succeeds in its first rollout is never
-  held (its run is the run without the floor, number for number), and `found` says so."""
+def test_a_floored_head_keeps_its_z_std_until_its_task_pays():
+  """z_std_floor: while a task pays nothing its head's z std stays at the floor, where the
+  bonus narrows it below without one; a task paid in its first rollout (a dense one) is
+  never held: with every task dense the run is the run without the floor, number for
+  number, and `paid` says so."""
   narrowing = dict(alpha2=1.0, alpha1=0.0)  # a strong bonus: the heads narrow at once
-  free, held = two_task_trainer(**narrowing), two_task_trainer(**narrowing, z_std_floor=1.0)
-  assert held.init().found.shape == (2,) and free.init().found.shape == (0,)
+  config = TrainConfig(tasks=("a", "b"), **{**SMALL, "n_synergies": 2, **narrowing})
+  unpaid = [ReachAction(TARGET), PaysNothing(-TARGET, obs_size=5)]
+  free, held = Trainer(config, unpaid), Trainer(config.replace(z_std_floor=1.0), unpaid)
+  assert held.init().paid.shape == (2,) and free.init().paid.shape == (0,)
   states = {"free": free.init(), "held": held.init()}
   for _ in range(4):
     states["free"], _ = free.train_step(states["free"])
     states["held"], metrics = held.train_step(states["held"])
-  assert _head_stds(states["free"]).min() < 0.97
-  assert _head_stds(states["held"]).min() == pytest.approx(1.0)
-  assert not bool(metrics["a/found"]) and not bool(metrics["b/found"])
+  assert _head_stds(states["free"])[1].min() < 0.97
+  assert _head_stds(states["held"])[1].min() == pytest.approx(1.0)
+  assert bool(metrics["a/paid"]) and not bool(metrics["b/paid"])
 
-  config = TrainConfig(tasks=("a", "b"), **{**SMALL, "n_synergies": 2, **narrowing})
-  envs = [AlwaysSucceeds(TARGET), AlwaysSucceeds(-TARGET, obs_size=5)]
-  plain, floored = Trainer(config, envs), Trainer(config.replace(z_std_floor=2.0), envs)
+  dense = [ReachAction(TARGET), ReachAction(-TARGET, obs_size=5)]
+  plain, floored = Trainer(config, dense), Trainer(config.replace(z_std_floor=2.0), dense)
   a, b = plain.init(), floored.init()
   for _ in range(3):
     a, _ = plain.train_step(a)
     b, metrics = floored.train_step(b)
-  assert bool(metrics["a/found"]) and bool(metrics["b/found"])
+  assert bool(metrics["a/paid"]) and bool(metrics["b/paid"])
   jax.tree.map(np.testing.assert_array_equal, jax.device_get(a.params), jax.device_get(b.params))
   assert _head_stds(b).max() < 2.0  # the floor above the start was never applied
 

@@ -38,9 +38,10 @@ from discosyn_jax.synergies import diagnostics
 from discosyn_jax.training import devices as devices_lib
 from discosyn_jax.training import evaluation
 
-# a task counts as found (z_std_floor) from the first rollout in which this share of the
-# episodes that ended succeeded
-FOUND = 0.1
+# a task counts as paid (z_std_floor) from the first rollout in which some step's reward from
+# the env was at least this large: a dense task at once, a task that pays only once found
+# (a weight that lifts 0.5 mm, a planted excursion) not before
+PAID = 0.01
 
 
 @struct.dataclass
@@ -51,9 +52,9 @@ class TrainState:
   env_states: tuple  # batched brax State per task
   rng: jax.Array  # uint32[2]
   step: jax.Array  # int32: train steps done
-  # bool per task: its training rollouts have succeeded (FOUND); empty without z_std_floor,
+  # bool per task: its training rollouts have been paid (PAID); empty without z_std_floor,
   # so that a checkpoint of a run without it holds no such array
-  found: jax.Array
+  paid: jax.Array
 
 
 class Trainer:
@@ -127,9 +128,9 @@ class Trainer:
     norms = tuple(running_statistics.init_state(jnp.zeros((s,))) for s in self.obs_sizes)
     # every leaf an array of the dtype train_step returns: one compiled signature, one
     # checkpoint layout
-    found = jnp.zeros((len(self.envs) if self.config.z_std_floor else 0,), bool)
+    paid = jnp.zeros((len(self.envs) if self.config.z_std_floor else 0,), bool)
     state = TrainState(params=params, opt_state=self.optimizer.init(params), normalizers=norms,
-                       env_states=envs, rng=key, step=jnp.zeros((), jnp.int32), found=found)
+                       env_states=envs, rng=key, step=jnp.zeros((), jnp.int32), paid=paid)
     return jax.tree.map(lambda x: jnp.asarray(x, dtype=jnp.asarray(x).dtype), state)
 
   def state_shardings(self, state: TrainState):
@@ -138,7 +139,7 @@ class Trainer:
     replicated, batched = devices_lib.replicated(self.mesh), devices_lib.batched(self.mesh)
     return state.replace(
         **{f: jax.tree.map(lambda _: replicated, getattr(state, f))
-           for f in ("params", "opt_state", "normalizers", "rng", "step", "found")},
+           for f in ("params", "opt_state", "normalizers", "rng", "step", "paid")},
         env_states=jax.tree.map(lambda x: batched if x.size else replicated, state.env_states))
 
   # -- acting ----------------------------------------------------------------
@@ -200,7 +201,7 @@ class Trainer:
     rng, update_key, *task_keys = jax.random.split(state.rng, 2 + len(self.envs))
     params = state.params
     rho = self.rho(state.step)  # None without a residual
-    env_states, norms, samples, metrics, own_values = [], [], [], {}, {}
+    env_states, norms, samples, metrics, own_values, paid_now = [], [], [], {}, {}, []
     for n, name in enumerate(cfg.tasks):
       env_state, traj = self._unroll(params, state.normalizers[n], state.env_states[n],
                                      task_keys[n], n, rho)
@@ -211,6 +212,7 @@ class Trainer:
       if cfg.normalize_observations:
         norm = running_statistics.update(norm, traj["obs"].reshape(-1, traj["obs"].shape[-1]))
       obs = self.normalize(traj["obs"], norm)
+      paid_now.append((jnp.abs(traj["reward"]) >= PAID).any())
       reward = traj["reward"] * cfg.reward_scaling
       log_q = jnp.zeros_like(reward)
       if self.model.has_discriminator:
@@ -236,11 +238,11 @@ class Trainer:
                                                    rho)
     if rho is not None:
       metrics["residual/rho"] = rho
-    found = state.found
-    if cfg.z_std_floor:  # a head is held open until its task's rollouts first succeed
-      found = found | jnp.stack([metrics[f"{name}/success"] >= FOUND for name in cfg.tasks])
-      params = networks.floor_head_std(params, ~found, cfg.z_std_floor)
-      metrics.update({f"{name}/found": found[n] for n, name in enumerate(cfg.tasks)})
+    paid = state.paid
+    if cfg.z_std_floor:  # a head is held open until its task first pays a rollout
+      paid = paid | jnp.stack(paid_now)
+      params = networks.floor_head_std(params, ~paid, cfg.z_std_floor)
+      metrics.update({f"{name}/paid": paid[n] for n, name in enumerate(cfg.tasks)})
     for n, name in enumerate(cfg.tasks):
       metrics.update({f"{name}/{k}": v for k, v in loss_metrics["tasks"][n].items()})
     metrics.update(loss_metrics["shared"])
@@ -250,7 +252,7 @@ class Trainer:
     metrics["finite"] = finite
     metrics["finite_values"] = own_values
     new = TrainState(params=params, opt_state=opt_state, normalizers=tuple(norms),
-                     env_states=tuple(env_states), rng=rng, step=state.step + 1, found=found)
+                     env_states=tuple(env_states), rng=rng, step=state.step + 1, paid=paid)
     # pin the layout of the returned state to the one it came in with (donation, next step)
     new = jax.lax.with_sharding_constraint(new, self.state_shardings(new))
     metrics = jax.lax.with_sharding_constraint(metrics, devices_lib.replicated(self.mesh))
