@@ -127,7 +127,7 @@ class TrainConfig:
   discriminator_hidden: tuple[int, ...] = (128, 128)
   init_z_std: float = 1.0  # initial std of pi(z|s,n)
   # a floor on each head's z std, held until its task first pays a training rollout (a
-  # reward of at least 0.01 at some step): the discriminator's bonus cannot narrow a head
+  # reward of at least +0.01 at some step): the discriminator's bonus cannot narrow a head
   # before its task has paid it anything; a dense task is paid at once (0: no floor)
   z_std_floor: float = 0.0
   init_action_std: float = 0.3  # initial std of p(a|z)

@@ -39,8 +39,8 @@ from discosyn_jax.training import devices as devices_lib
 from discosyn_jax.training import evaluation
 
 # a task counts as paid (z_std_floor) from the first rollout in which some step's reward from
-# the env was at least this large: a dense task at once, a task that pays only once found
-# (a weight that lifts 0.5 mm, a planted excursion) not before
+# the env was at least this (positive: the weight pull pays -0.007 a step at rest, 0.01 for a
+# lift of 0.9 mm): a dense task at once, a task that pays only once found not before
 PAID = 0.01
 
 
@@ -212,7 +212,7 @@ class Trainer:
       if cfg.normalize_observations:
         norm = running_statistics.update(norm, traj["obs"].reshape(-1, traj["obs"].shape[-1]))
       obs = self.normalize(traj["obs"], norm)
-      paid_now.append((jnp.abs(traj["reward"]) >= PAID).any())
+      paid_now.append((traj["reward"] >= PAID).any())
       reward = traj["reward"] * cfg.reward_scaling
       log_q = jnp.zeros_like(reward)
       if self.model.has_discriminator:
