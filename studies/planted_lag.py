@@ -18,6 +18,9 @@ reading z), trained on the same seeds:
   floor         each head's z std held at >= 0.7 until its task first pays a rollout
                 (`z_std_floor`; 0.7 = 1.06 nat per dimension: in finding_lag's set #2 table
                 every head that kept >= 1.0 found the weight pull)
+  residual      a full-action residual beside the synergies, ramped to 0.3 over the first
+                half of the run (the `-residual` presets; agent/residual.py)
+  residual-late the same held at 0 for the first third, ramped over a sixth (`-residual-late`)
   ppo           full-action PPO (the paper's control) at the same size
 
 then finding_lag's table of the found task and a dense one: when each run first reaches 0.8,
@@ -34,19 +37,23 @@ from __future__ import annotations
 import argparse
 import pathlib
 
+from discosyn_jax.experiments import presets  # TrainConfigs only, no JAX
+
 FLOOR = 0.7
 VARIANTS = {"default": {}, "q-activation": {"discriminator_target": "activation"},
             "zfree": {"squash_z": False}, "no-bonus": {"alpha2": 0.0},
-            "floor": {"z_std_floor": FLOOR}, "ppo": None}
+            "floor": {"z_std_floor": FLOOR}, "residual": presets.RESIDUAL,
+            "residual-late": presets.RESIDUAL_LATE,
+            "ppo": None}
 # each variant's part of its method's name (experiments/method.py)
 NAMED = {"default": {}, "q-activation": {"tag": ("qact",)}, "zfree": {"control": "zfree"},
-         "no-bonus": {"tag": ("alpha2=0",)}, "floor": {}, "ppo": {}}  # Method.of names the floor
+         "no-bonus": {"tag": ("alpha2=0",)}, "floor": {}, "residual": {}, "residual-late": {},
+         "ppo": {}}  # Method.of names the floor and the residual
 SETS = ("planted_found", "planted_reach", "planted_far")
 
 
 def configs(variants, seeds, steps: int | None = None, task_set: str = SETS[0]):
   """(folder name, config, experiment.json) of each variant and seed."""
-  from discosyn_jax.experiments import presets
   from discosyn_jax.experiments.method import Method
 
   base = presets.preset(f"{task_set}-disco3-linear")

@@ -90,7 +90,8 @@ def test_the_planted_lag_study_trains_its_variants_and_reads_them(tmp_path, caps
   lag = study("planted_lag")
   made = {meta["method"]: config for _, config, meta in lag.configs(list(lag.VARIANTS), [0])}
   assert set(made) == {"DiscoSyn3-L", "DiscoSyn3-L-qact", "DiscoSyn3-L-zfree", "DiscoSyn3-L-alpha2=0",
-                       "DiscoSyn3-L-zfloor0.7", "PPO"}
+                       "DiscoSyn3-L-zfloor0.7", "DiscoSyn3-L-res0.3r200", "DiscoSyn3-L-res0.3r67s133",
+                       "PPO"}
   assert made["DiscoSyn3-L-zfloor0.7"].z_std_floor == lag.FLOOR
   assert made["PPO"].decoder == "identity" and made["PPO"].steps == made["DiscoSyn3-L"].steps
   assert all(Method.parse(name).name == name for name in made)
