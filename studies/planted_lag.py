@@ -24,7 +24,10 @@ reading z), trained on the same seeds:
   ppo           full-action PPO (the paper's control) at the same size
 
 then finding_lag's table of the found task and a dense one: when each run first reaches 0.8,
-and over the first WINDOW env steps what it was paid, its head's entropy and the bonus.
+and over the first WINDOW env steps what it was paid, its head's entropy and the bonus. For
+an excursion task, also how far each run's decoder reaches along the task's direction at the
+end (z at the corners of its box), and, with --starts, the share of the starting policies'
+samples that reach the threshold (no training).
 
   python -m studies.planted_lag [--set planted_found] [--seeds 0 1 2] [--variants ...]
                                 [--steps 400] [--out DIR]
@@ -50,6 +53,7 @@ NAMED = {"default": {}, "q-activation": {"tag": ("qact",)}, "zfree": {"control":
          "no-bonus": {"tag": ("alpha2=0",)}, "floor": {}, "residual": {}, "residual-late": {},
          "ppo": {}}  # Method.of names the floor and the residual
 SETS = ("planted_found", "planted_reach", "planted_far")
+GOAL_SIZE = 2  # a planted task's observation: its goal in its plane (task_rank)
 
 
 def configs(variants, seeds, steps: int | None = None, task_set: str = SETS[0]):
@@ -79,7 +83,12 @@ def main(argv=None) -> None:
   parser.add_argument("--window", type=int, default=250_000,
                       help="env steps of a task over which finding_lag reads paid, H and bonus")
   parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("runs/planted-lag"))
+  parser.add_argument("--starts", action="store_true",
+                      help="only print how often the starting policies reach the excursion")
   args = parser.parse_args(argv)
+  if args.starts:
+    print_starts(args.set, args.seeds)
+    return
 
   from studies.finding_lag import print_tables, runs
   from studies.residual_transfer import train_row
@@ -89,7 +98,82 @@ def main(argv=None) -> None:
   for name, config, meta in configs(args.variants, args.seeds, args.steps, args.set):
     print(f"[{name}] train", flush=True)
     train_row(args.out, name, config, meta)
-  print_tables(runs([args.out], args.set), [TASK_SETS[args.set][-1], "planted0"], args.window)
+  found = runs([args.out], args.set)
+  print_tables(found, [TASK_SETS[args.set][-1], "planted0"], args.window)
+  print_reach(found, TASK_SETS[args.set][-1])
+
+
+def _excursion(task: str):
+  """(the task's direction, its threshold); None for a task that pays a posture."""
+  from discosyn_jax import tasks
+  from discosyn_jax.tasks import planted
+
+  env = tasks.make(task)
+  if not env.config.excursion:
+    return None
+  return planted.task_plane(env.config)[:, 0], env.config.excursion
+
+
+def decoder_reach(decoder: dict, direction) -> float:
+  """The most a linear decoder reaches along `direction` with a bounded z (at a corner of
+  z's box, tanh z = +-1), its actions clipped to [-1, 1] as the env clips them."""
+  import itertools
+
+  import numpy as np
+
+  kernel, bias = decoder["synergies.kernel"], decoder["synergies.bias"]
+  corners = np.array(list(itertools.product([-1.0, 1.0], repeat=kernel.shape[0])))
+  return float((np.clip(corners @ kernel + bias, -1, 1) @ direction).max())
+
+
+def print_reach(found: list, task: str) -> None:
+  import numpy as np
+
+  from discosyn_jax.experiments.report_runs import order
+
+  excursion = _excursion(task)
+  if excursion is None:
+    return
+  direction, threshold = excursion
+  print(f"\n{task}: the decoder's reach along the task's direction at the end (z at a corner "
+        f"of its box; the task pays from {threshold:g})\n")
+  print("| method | seed | reach | end |")
+  print("|---|---|---|---|")
+  for method in order({r.method for r in found}):
+    for run in sorted((r for r in found if r.method == method), key=lambda r: r.seed):
+      file = run.path / "decoder.npz"
+      if run.config.decoder != "linear" or not file.is_file():
+        continue
+      reach = decoder_reach(dict(np.load(file)), direction)
+      print(f"| {method} | {run.seed} | {reach:.2f} | {run.at_end()[f'{task}/success']:.2f} |")
+
+
+def print_starts(task_set: str, seeds, draws: int = 200_000) -> None:
+  """The share of the starting policies' samples (the synergy preset's, PPO's) that reach the
+  excursion task's threshold, per seed: how rare a first payment is before any update."""
+  import jax
+  import jax.numpy as jnp
+
+  from discosyn_jax.agent import networks, policy
+  from discosyn_jax.tasks import TASK_SETS
+
+  task = TASK_SETS[task_set][-1]
+  excursion = _excursion(task)
+  if excursion is None:
+    raise SystemExit(f"{task} pays a posture, not an excursion")
+  direction, threshold = excursion
+  print(f"{task}: the share of the starting policies' samples reaching {threshold:g}")
+  for variant in ("default", "ppo"):
+    for _, config, meta in configs([variant], seeds, None, task_set):
+      model = networks.build(config, (GOAL_SIZE,) * len(config.tasks), 20)
+      _, init_key, _ = networks.split_seed_key(jax.random.PRNGKey(config.seed), len(config.tasks))
+      params = model.init(init_key, [jnp.zeros((1, GOAL_SIZE))] * len(config.tasks))
+      key = jax.random.PRNGKey(1000 + config.seed)
+      goals = jax.random.uniform(key, (draws, GOAL_SIZE), minval=-1.0, maxval=1.0)
+      draws_ = policy.noise(jax.random.fold_in(key, 1), draws, model.n_synergies, 20)
+      _, action, _ = policy.sample(model, params, len(config.tasks) - 1, goals, draws_)
+      reach = jnp.clip(action, -1.0, 1.0) @ direction
+      print(f"  {meta['method']} seed {config.seed}: {float((reach >= threshold).mean()):.2%}")
 
 
 if __name__ == "__main__":

@@ -125,3 +125,20 @@ def test_the_head_floor_study_runs_the_plans_default_row_with_the_floor_on_new_s
     assert Method.parse(meta["method"]) == Method.of(config)
   used = {seed for row in plan.rows if row.name.startswith("set2") for seed in row.seeds}
   assert not used & {meta["seed"] for _, _, meta in floor.configs([8, 9, 10])}
+
+
+def test_the_planted_lag_study_reads_a_decoders_reach_along_a_direction():
+  """decoder_reach: the most a linear decoder gives along a direction with z at a corner of
+  its box, its actions clipped to [-1, 1] as the env clips them."""
+  import numpy as np
+
+  lag = study("planted_lag")
+  kernel = np.zeros((3, 20))
+  kernel[0, 0], kernel[1, 1] = 0.5, 0.25
+  direction = np.zeros(20)
+  direction[:2] = [0.6, 0.8]
+  decoder = {"synergies.kernel": kernel, "synergies.bias": np.zeros(20)}
+  assert lag.decoder_reach(decoder, direction) == pytest.approx(0.6 * 0.5 + 0.8 * 0.25)
+  decoder["synergies.bias"][0] = 0.8  # 1.3 on the first action, clipped to 1
+  assert lag.decoder_reach(decoder, direction) == pytest.approx(0.6 * 1.0 + 0.8 * 0.25)
+  assert lag._excursion("planted0") is None and lag._excursion("planted_far3")[1] == 1.4
