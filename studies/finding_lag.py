@@ -1,7 +1,7 @@
 """When each run first finds a task, and what its head did before: why the synergy rows find
 set #2's weight pull and dice later than full-action PPO, read from the records' training
 logs, run by run, with no new training (and the same table for the planted test bed's
-planted_found and planted_reach, studies/planted_lag.py).
+planted sets, studies/planted_lag.py).
 
 Per run and task (the weight pull and the dice by default), from metrics.jsonl (the
 stochastic policy that collects the samples) and eval.jsonl (the deterministic one):
@@ -106,9 +106,16 @@ def _mean_of(rows, key: str) -> float | None:
   return float(np.mean(values)) if values else None
 
 
-def print_tables(found: list, task_names, window: int) -> None:
+def in_order(found: list):
+  """(method, run) of each run, in the report's order of rows, each row's runs by seed."""
   from discosyn_jax.experiments.report_runs import order
 
+  for method in order({r.method for r in found}):
+    for run in sorted((r for r in found if r.method == method), key=lambda r: r.seed):
+      yield method, run
+
+
+def print_tables(found: list, task_names, window: int) -> None:
   for task in task_names:
     print(f"\n{task}: found = env steps to evaluated success {FOUND}; end = success at the "
           f"end; over the first {window:,} env steps: paid = mean {term(task)} per step, H/dim = the head's "
@@ -116,13 +123,12 @@ def print_tables(found: list, task_names, window: int) -> None:
           "gradient, bonus = alpha2 log q per step\n")
     print("| method | seed | found | end | paid | H/dim start -> end | share | bonus |")
     print("|---|---|---|---|---|---|---|---|")
-    for method in order({r.method for r in found}):
-      for run in sorted((r for r in found if r.method == method), key=lambda r: r.seed):
-        s = summary(run, task, window)
-        at = "-" if s["found"] is None else f"{s['found'] / 1e6:.2f} M"
-        share = "-" if s["share"] is None else f"{s['share']:.2f}"
-        print(f"| {method} | {run.seed} | {at} | {s['end']:.2f} | {s['paid']:.4f} | "
-              f"{s['h_start']:.2f} -> {s['h_end']:.2f} | {share} | {s['bonus']:.4f} |")
+    for method, run in in_order(found):
+      s = summary(run, task, window)
+      at = "-" if s["found"] is None else f"{s['found'] / 1e6:.2f} M"
+      share = "-" if s["share"] is None else f"{s['share']:.2f}"
+      print(f"| {method} | {run.seed} | {at} | {s['end']:.2f} | {s['paid']:.4f} | "
+            f"{s['h_start']:.2f} -> {s['h_end']:.2f} | {share} | {s['bonus']:.4f} |")
 
 
 if __name__ == "__main__":

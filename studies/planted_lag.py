@@ -129,7 +129,7 @@ def decoder_reach(decoder: dict, direction) -> float:
 def print_reach(found: list, task: str) -> None:
   import numpy as np
 
-  from discosyn_jax.experiments.report_runs import order
+  from studies.finding_lag import in_order
 
   excursion = _excursion(task)
   if excursion is None:
@@ -139,13 +139,12 @@ def print_reach(found: list, task: str) -> None:
         f"of its box; the task pays from {threshold:g})\n")
   print("| method | seed | reach | end |")
   print("|---|---|---|---|")
-  for method in order({r.method for r in found}):
-    for run in sorted((r for r in found if r.method == method), key=lambda r: r.seed):
-      file = run.path / "decoder.npz"
-      if run.config.decoder != "linear" or not file.is_file():
-        continue
-      reach = decoder_reach(dict(np.load(file)), direction)
-      print(f"| {method} | {run.seed} | {reach:.2f} | {run.at_end()[f'{task}/success']:.2f} |")
+  for method, run in in_order(found):
+    file = run.path / "decoder.npz"
+    if run.config.decoder != "linear" or not file.is_file():
+      continue
+    reach = decoder_reach(dict(np.load(file)), direction)
+    print(f"| {method} | {run.seed} | {reach:.2f} | {run.at_end()[f'{task}/success']:.2f} |")
 
 
 def print_starts(task_set: str, seeds, draws: int = 200_000) -> None:
@@ -165,9 +164,7 @@ def print_starts(task_set: str, seeds, draws: int = 200_000) -> None:
   print(f"{task}: the share of the starting policies' samples reaching {threshold:g}")
   for variant in ("default", "ppo"):
     for _, config, meta in configs([variant], seeds, None, task_set):
-      model = networks.build(config, (GOAL_SIZE,) * len(config.tasks), 20)
-      _, init_key, _ = networks.split_seed_key(jax.random.PRNGKey(config.seed), len(config.tasks))
-      params = model.init(init_key, [jnp.zeros((1, GOAL_SIZE))] * len(config.tasks))
+      model, params = networks.initial_params(config, (GOAL_SIZE,) * len(config.tasks), 20)
       key = jax.random.PRNGKey(1000 + config.seed)
       goals = jax.random.uniform(key, (draws, GOAL_SIZE), minval=-1.0, maxval=1.0)
       draws_ = policy.noise(jax.random.fold_in(key, 1), draws, model.n_synergies, 20)

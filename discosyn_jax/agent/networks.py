@@ -237,7 +237,13 @@ def random_decoder(config: TrainConfig, action_size: int):
   """The random decoder parameters a run of `config` starts from, without building its envs:
   the decoder's initialisation draws from its own path in the module, whatever the
   observation sizes of the heads (tests/test_discovery.py checks it)."""
-  model = build(config, (1,) * len(config.tasks), action_size)
-  _, init_key, _ = split_seed_key(jax.random.PRNGKey(config.seed), len(config.tasks))
-  params = model.init(init_key, [jnp.zeros((1, 1))] * len(config.tasks))
+  _, params = initial_params(config, (1,) * len(config.tasks), action_size)
   return params["params"]["synergy_decoder"]
+
+
+def initial_params(config: TrainConfig, obs_sizes: Sequence[int], action_size: int):
+  """(the module, the parameters a run of `config` starts from) for tasks with these
+  observation sizes, without building envs: what `Trainer.init` draws for the networks."""
+  model = build(config, obs_sizes, action_size)
+  _, init_key, _ = split_seed_key(jax.random.PRNGKey(config.seed), len(config.tasks))
+  return model, model.init(init_key, [jnp.zeros((1, s)) for s in obs_sizes])

@@ -212,7 +212,8 @@ class Trainer:
       if cfg.normalize_observations:
         norm = running_statistics.update(norm, traj["obs"].reshape(-1, traj["obs"].shape[-1]))
       obs = self.normalize(traj["obs"], norm)
-      paid_now.append((traj["reward"] >= PAID).any())
+      if cfg.z_std_floor:
+        paid_now.append((traj["reward"] >= PAID).any())
       reward = traj["reward"] * cfg.reward_scaling
       log_q = jnp.zeros_like(reward)
       if self.model.has_discriminator:
