@@ -25,6 +25,16 @@ def test_every_committed_record_name_reads_back_to_itself():
     assert Method.parse(name).name == name
 
 
+def test_every_committed_config_loads_under_this_release():
+  """A field added since a record was written is written into it (`discosyn upgrade`) in the
+  same change: a committed record that only loads after an upgrade is a report that fails."""
+  from discosyn_jax import config as config_lib
+  paths = [p for folder in ("docs/results", "tests/fixtures") for p in (ROOT / folder).rglob("config.json")]
+  assert len(paths) > 300
+  for path in paths:
+    config_lib.load(path)
+
+
 def test_a_name_reads_as_its_parts():
   m = Method.parse("DiscoSyn3-L-reward-res0.3r150 frozen-res1r150")
   assert (m.family, m.synergies, m.decoder, m.start, m.frozen) == ("DiscoSyn", 3, "L", "reward", True)
