@@ -46,7 +46,8 @@ ADDED = {"squash_z": False, "physics": "reference", "reset_pool": False, "decode
          "decoder_weight_decay_steps": 0, "hand": "shadow20",
          "decoder_init": "random", "discriminator_target": "z", "task_posture": False,
          "residual": 0.0, "residual_ramp": 0.0, "residual_start": 0.0,
-         "init_residual_std": 0.05, "closing_episodes": 0, "z_std_floor": 0.0}
+         "init_residual_std": 0.05, "closing_episodes": 0, "z_std_floor": 0.0,
+         "task_noise": False}
 # Fields renamed since a release, read by what they became: the residual's schedule was in
 # train steps until 2026-12-05 and is a share of the run's `steps` since (the same run)
 RENAMED = {"residual_ramp_steps": "residual_ramp", "residual_start_steps": "residual_start"}
@@ -131,6 +132,11 @@ class TrainConfig:
   # before its task has paid it anything; a dense task is paid at once (0: no floor)
   z_std_floor: float = 0.0
   init_action_std: float = 0.3  # initial std of p(a|z)
+  # each task's own std of p(a|z), the action's noise around the shared decoder's mean, in
+  # place of the one std all tasks share: the tasks that pay narrow their own noise, not
+  # that of a task not yet found; a task's own, so it learns beside a frozen decoder too
+  # (needs the decoder's noise; not for the identity decoder, whose heads own theirs)
+  task_noise: bool = False
   # -- PPO --
   num_envs: int = 64  # parallel envs per task
   unroll_length: int = 20  # control steps every env takes per train step
@@ -226,6 +232,9 @@ class TrainConfig:
                        "decoder_weight_decay_steps = 0")
     if self.decoder_weight_decay_steps and not self.decoder_weight_decay:
       raise ValueError("decoder_weight_decay_steps anneals a decoder_weight_decay: set one")
+    if self.task_noise and (self.decoder == "identity" or not self.decoder_noise):
+      raise ValueError("task_noise gives each task its own decoder noise: it needs a decoder "
+                       "with noise (not identity, decoder_noise true)")
     if not self.decoder_noise and self.alpha3:
       raise ValueError("a noiseless decoder (decoder_noise false) has no entropy: set alpha3 = 0")
     if self.physics not in PHYSICS:

@@ -18,6 +18,10 @@ reading z), trained on the same seeds:
   floor         each head's z std held at >= 0.7 until its task first pays a rollout
                 (`z_std_floor`; 0.7 = 1.06 nat per dimension: in finding_lag's set #2 table
                 every head that kept >= 1.0 found the weight pull)
+  task-noise    each task's own decoder noise (`task_noise`): the paid tasks narrow their
+                own, not the unpaid task's
+  task-noise-no-bonus  the same with alpha2 = 0: nothing but its own PPO narrows a task's
+                noise
   residual      a full-action residual beside the synergies, ramped to 0.3 over the first
                 half of the run (the `-residual` presets; agent/residual.py)
   residual-late the same held at 0 for the first third, ramped over a sixth (`-residual-late`)
@@ -45,13 +49,16 @@ from discosyn_jax.experiments import presets  # TrainConfigs only, no JAX
 FLOOR = 0.7
 VARIANTS = {"default": {}, "q-activation": {"discriminator_target": "activation"},
             "zfree": {"squash_z": False}, "no-bonus": {"alpha2": 0.0},
-            "floor": {"z_std_floor": FLOOR}, "residual": presets.RESIDUAL,
+            "floor": {"z_std_floor": FLOOR}, "task-noise": {"task_noise": True},
+            "task-noise-no-bonus": {"task_noise": True, "alpha2": 0.0},
+            "residual": presets.RESIDUAL,
             "residual-late": presets.RESIDUAL_LATE,
             "ppo": None}
 # each variant's part of its method's name (experiments/method.py)
 NAMED = {"default": {}, "q-activation": {"tag": ("qact",)}, "zfree": {"control": "zfree"},
-         "no-bonus": {"tag": ("alpha2=0",)}, "floor": {}, "residual": {}, "residual-late": {},
-         "ppo": {}}  # Method.of names the floor and the residual
+         "no-bonus": {"tag": ("alpha2=0",)}, "floor": {}, "task-noise": {},
+         "task-noise-no-bonus": {"tag": ("tasknoise", "alpha2=0")}, "residual": {},
+         "residual-late": {}, "ppo": {}}  # Method.of names the floor, the noise, the residual
 SETS = ("planted_found", "planted_reach", "planted_far")
 GOAL_SIZE = 2  # a planted task's observation: its goal in its plane (task_rank)
 

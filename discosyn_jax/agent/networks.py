@@ -4,7 +4,8 @@ the discriminator.
   pi(z | s, n) = N(mu_n(s), sigma_n)        a head per task (observation sizes differ)
   V_n(s)                                     a value head per task
   p(a | z)     = N(D(z), sigma_phi)          shared by all tasks; D linear (b x 20) or an MLP;
-                                             its mean D(z) is the action at evaluation
+                                             its mean D(z) is the action at evaluation; with
+                                             `task_noise` sigma_phi is each task's own
   q(z | a)     = N(m(a), sigma_psi)          the discriminator
   pi(r | s, n) = N(tanh(m_n(s)), sigma_r)    with `residual` on: a full-action residual per
                                              task, added to the action with a scheduled
@@ -96,6 +97,7 @@ class DiscoSyn(nn.Module):
   discriminator_target: str = "z"  # config.DISCRIMINATOR_TARGETS
   task_posture: bool = False  # a learned posture per task, added to the decoder's mean
   residual: bool = False  # a full-action residual head per task (residual.py)
+  task_noise: bool = False  # each task's own std of p(a | z) around the shared mean
   policy_hidden: tuple[int, ...] = (128, 128)
   value_hidden: tuple[int, ...] = (128, 128)
   decoder_hidden: tuple[int, ...] = (128, 128)
@@ -123,6 +125,11 @@ class DiscoSyn(nn.Module):
       # not the differences between the tasks' postures
       self.postures = self.param("postures", nn.initializers.zeros,
                                  (len(self.obs_sizes), self.action_size))
+    if self.task_noise:
+      # what the decoder's own log std would be, one row per task
+      self.task_log_stds = self.param(
+          "task_log_stds", nn.initializers.constant(math.log(self.init_action_std)),
+          (len(self.obs_sizes), self.action_size))
     if self.residual:  # beside the z heads, not sharing their layers: z's are as without it
       self.residuals = [GaussianHead(self.policy_hidden, self.action_size, self.init_residual_std)
                         for _ in self.obs_sizes]
@@ -153,8 +160,11 @@ class DiscoSyn(nn.Module):
     return mean, log_std if self.decoder_noise else None
 
   def act(self, task: int, z):
-    """(mean, log_std) of task's action given z: the decoder's, moved by the task's posture."""
+    """(mean, log_std) of task's action given z: the decoder's, moved by the task's posture,
+    with the task's own noise where each has its own."""
     mean, log_std = self.decode(z)
+    if self.task_noise and log_std is not None:
+      log_std = jnp.broadcast_to(self.task_log_stds[task], mean.shape)
     return (mean + self.postures[task] if self.task_posture else mean), log_std
 
   def activation(self, z):
@@ -191,6 +201,7 @@ def build(config, obs_sizes: Sequence[int], action_size: int) -> DiscoSyn:
       decoder=config.decoder, decoder_bias=config.decoder_bias, decoder_noise=config.decoder_noise,
       squash_z=config.squash_z, discriminator_target=config.discriminator_target,
       task_posture=config.task_posture, residual=bool(config.residual),
+      task_noise=config.task_noise,
       policy_hidden=tuple(config.policy_hidden), value_hidden=tuple(config.value_hidden),
       decoder_hidden=tuple(config.decoder_hidden),
       discriminator_hidden=tuple(config.discriminator_hidden),
@@ -201,8 +212,8 @@ def build(config, obs_sizes: Sequence[int], action_size: int) -> DiscoSyn:
 # Top-level parameter collections by role: the optimiser labels them (ppo.optimizer), the
 # gradient norms are logged per role (trainer.py).
 def role(name: str) -> str:
-  # a posture and a residual head are their task's
-  if name.startswith(("heads_", "residuals_")) or name == "postures":
+  # a posture, a residual head and a task's own noise are their task's
+  if name.startswith(("heads_", "residuals_")) or name in ("postures", "task_log_stds"):
     return "heads"
   if name.startswith("values_"):
     return "values"

@@ -5,8 +5,10 @@ Where each term of the extended reward (paper, Eq. 2) goes:
   alpha2 log q(z|a)  -> the reward. It depends on the sampled (z, a): the agent is paid for
                         choosing actions whose z can be read back from a, and the return
                         carries that payment to earlier steps, as Eq. 2 asks.
-  alpha1 H(pi(z|s,n)), alpha3 H(p(a|z)) -> the loss, as -alpha * entropy. Both policies have
-                        state-independent stds, so each entropy is the same at every state:
+  alpha1 H(pi(z|s,n)), alpha3 H(p(a|z)) -> the loss, as -alpha * entropy (H(p(a|z)): the
+                        mean of the tasks' where each has its own noise, task_noise). Both
+                        policies have state-independent stds, so each entropy is the same
+                        at every state:
                         as a reward it would add a constant per step, which the
                         score-function gradient of PPO cannot differentiate (it only sees
                         rewards through log-probabilities of sampled actions) and which the
@@ -72,14 +74,19 @@ def loss(params, model: DiscoSyn, samples: Sequence[Samples], config: TrainConfi
   """The whole minibatch: the mean over tasks of their PPO losses, the decoder's entropy
   bonus, and (on disjoint parameters) the discriminator's negative log-likelihood. `rho`:
   the residual's weight the samples were drawn with, with a residual."""
-  total, per_task = 0.0, []
+  total, per_task, entropies_a = 0.0, [], []
   for task, s in enumerate(samples):
     task_total, metrics, a_log_std = task_loss(model, params, task, s, config, rho)
     total += task_total / len(samples)
+    if a_log_std is not None and model.task_noise:
+      metrics["entropy_a"] = gaussian_entropy(a_log_std).mean()
+      entropies_a.append(metrics["entropy_a"])
     per_task.append(metrics)
   shared: dict[str, Any] = {}
   if a_log_std is not None:
-    entropy_a = gaussian_entropy(a_log_std).mean()
+    # each task's own noise: the bonus is the mean of the tasks' entropies
+    entropy_a = (sum(entropies_a) / len(entropies_a) if model.task_noise
+                 else gaussian_entropy(a_log_std).mean())
     total -= config.alpha3 * entropy_a
     shared["entropy_a"] = entropy_a
   if model.has_discriminator:
