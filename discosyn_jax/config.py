@@ -47,7 +47,7 @@ ADDED = {"squash_z": False, "physics": "reference", "reset_pool": False, "decode
          "decoder_init": "random", "discriminator_target": "z", "task_posture": False,
          "residual": 0.0, "residual_ramp": 0.0, "residual_start": 0.0,
          "init_residual_std": 0.05, "closing_episodes": 0, "z_std_floor": 0.0,
-         "task_noise": False}
+         "task_noise": False, "bonus_cap": False}
 # Fields renamed since a release, read by what they became: the residual's schedule was in
 # train steps until 2026-12-05 and is a share of the run's `steps` since (the same run)
 RENAMED = {"residual_ramp_steps": "residual_ramp", "residual_start_steps": "residual_start"}
@@ -121,6 +121,11 @@ class TrainConfig:
   # weight of the discriminator reward log q(z|a), added to the reward of every control step
   alpha2: float = 1e-2
   alpha3: float = 1e-3  # weight of the decoder entropy bonus H(p(a|z)) in the loss
+  # each task's bonus alpha2 log q capped, per rollout, at the spread of what the task itself
+  # pays: scaled by min(1, std(reward) / std(bonus)), so that the bonus cannot outweigh the
+  # task's own reward, and a task that pays nothing is not steered by the bonus alone
+  # (which pays its exploration to narrow); off: the paper's constant alpha2
+  bonus_cap: bool = False
   # -- networks --
   policy_hidden: tuple[int, ...] = (128, 128)
   value_hidden: tuple[int, ...] = (128, 128)
@@ -232,6 +237,9 @@ class TrainConfig:
                        "decoder_weight_decay_steps = 0")
     if self.decoder_weight_decay_steps and not self.decoder_weight_decay:
       raise ValueError("decoder_weight_decay_steps anneals a decoder_weight_decay: set one")
+    if self.bonus_cap and self.decoder == "identity":
+      raise ValueError("the identity decoder (full-action PPO) has no discriminator bonus to cap: "
+                       "set bonus_cap = false")
     if self.task_noise and (self.decoder == "identity" or not self.decoder_noise):
       raise ValueError("task_noise gives each task its own decoder noise: it needs a decoder "
                        "with noise (not identity, decoder_noise true)")

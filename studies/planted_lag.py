@@ -22,6 +22,8 @@ reading z), trained on the same seeds:
                 own, not the unpaid task's
   task-noise-no-bonus  the same with alpha2 = 0: nothing but its own PPO narrows a task's
                 noise
+  task-noise-bonus-cap  the same with the bonus: each task's capped at the spread of what
+                it pays (`bonus_cap`), none for a task that pays nothing
   residual      a full-action residual beside the synergies, ramped to 0.3 over the first
                 half of the run (the `-residual` presets; agent/residual.py)
   residual-late the same held at 0 for the first third, ramped over a sixth (`-residual-late`)
@@ -51,13 +53,15 @@ VARIANTS = {"default": {}, "q-activation": {"discriminator_target": "activation"
             "zfree": {"squash_z": False}, "no-bonus": {"alpha2": 0.0},
             "floor": {"z_std_floor": FLOOR}, "task-noise": {"task_noise": True},
             "task-noise-no-bonus": {"task_noise": True, "alpha2": 0.0},
+            "task-noise-bonus-cap": {"task_noise": True, "bonus_cap": True},
             "residual": presets.RESIDUAL,
             "residual-late": presets.RESIDUAL_LATE,
             "ppo": None}
 # each variant's part of its method's name (experiments/method.py)
 NAMED = {"default": {}, "q-activation": {"tag": ("qact",)}, "zfree": {"control": "zfree"},
          "no-bonus": {"tag": ("alpha2=0",)}, "floor": {}, "task-noise": {},
-         "task-noise-no-bonus": {"tag": ("tasknoise", "alpha2=0")}, "residual": {},
+         "task-noise-no-bonus": {"tag": ("tasknoise", "alpha2=0")}, "task-noise-bonus-cap": {},
+         "residual": {},
          "residual-late": {}, "ppo": {}}  # Method.of names the floor, the noise, the residual
 SETS = ("planted_found", "planted_reach", "planted_far")
 GOAL_SIZE = 2  # a planted task's observation: its goal in its plane (task_rank)

@@ -91,8 +91,13 @@ def test_the_planted_lag_study_trains_its_variants_and_reads_them(tmp_path, caps
   made = {meta["method"]: config for _, config, meta in lag.configs(list(lag.VARIANTS), [0])}
   assert set(made) == {"DiscoSyn3-L", "DiscoSyn3-L-qact", "DiscoSyn3-L-zfree", "DiscoSyn3-L-alpha2=0",
                        "DiscoSyn3-L-zfloor0.7", "DiscoSyn3-L-res0.3r200", "DiscoSyn3-L-res0.3r67s133",
-                       "PPO"}
+                       "DiscoSyn3-L-tasknoise", "DiscoSyn3-L-tasknoise-alpha2=0",
+                       "DiscoSyn3-L-tasknoise-bonuscap", "PPO"}
   assert made["DiscoSyn3-L-zfloor0.7"].z_std_floor == lag.FLOOR
+  assert made["DiscoSyn3-L-tasknoise"].task_noise and made["DiscoSyn3-L-tasknoise"].alpha2 > 0
+  assert made["DiscoSyn3-L-tasknoise-alpha2=0"].task_noise
+  assert made["DiscoSyn3-L-tasknoise-alpha2=0"].alpha2 == 0.0
+  assert made["DiscoSyn3-L-tasknoise-bonuscap"].bonus_cap
   assert made["PPO"].decoder == "identity" and made["PPO"].steps == made["DiscoSyn3-L"].steps
   assert all(Method.parse(name).name == name for name in made)
   assert made["DiscoSyn3-L-qact"].discriminator_target == "activation"
@@ -142,3 +147,25 @@ def test_the_planted_lag_study_reads_a_decoders_reach_along_a_direction():
   decoder["synergies.bias"][0] = 0.8  # 1.3 on the first action, clipped to 1
   assert lag.decoder_reach(decoder, direction) == pytest.approx(0.6 * 1.0 + 0.8 * 0.25)
   assert lag._excursion("planted0") is None and lag._excursion("planted_far3")[1] == 1.4
+
+
+def test_the_solving_reach_study_measures_the_distance_to_a_decoders_box():
+  """distance: the RMS per actuator from each action to {W u + c : u in [-1, 1]^b}, averaged
+  over the actions: 0 inside it, the part outside the span or past the box's face else."""
+  import numpy as np
+
+  reach = study("solving_reach")
+  kernel = np.zeros((2, 20))
+  kernel[0, 0], kernel[1, 1] = 0.5, 1.0
+  bias = np.zeros(20)
+  inside = np.zeros((1, 20))
+  inside[0, :2] = [0.25, -1.0]
+  assert reach.distance(kernel, bias, inside) == pytest.approx(0.0, abs=1e-9)
+  past = np.zeros((1, 20))
+  past[0, 0] = 0.9  # 0.4 past the box's face along the first synergy
+  off = np.zeros((1, 20))
+  off[0, 2] = 0.2  # outside the span
+  assert reach.distance(kernel, bias, past) == pytest.approx(np.sqrt(0.4 ** 2 / 20))
+  assert reach.distance(kernel, bias, np.concatenate([past, off])) == pytest.approx(
+      (np.sqrt(0.4 ** 2 / 20) + np.sqrt(0.2 ** 2 / 20)) / 2)
+  assert reach.distance(kernel, bias + 0.1, inside + 0.1) == pytest.approx(0.0, abs=1e-9)

@@ -215,10 +215,13 @@ class Trainer:
       if cfg.z_std_floor:
         paid_now.append((traj["reward"] >= PAID).any())
       reward = traj["reward"] * cfg.reward_scaling
-      log_q = jnp.zeros_like(reward)
+      log_q, alpha2 = jnp.zeros_like(reward), cfg.alpha2
       if self.model.has_discriminator:
         log_q = ppo.discriminator_log_prob(self.model, params, traj["z"], traj["action"])
-        reward = reward + cfg.alpha2 * log_q
+        if cfg.bonus_cap:
+          alpha2 = alpha2 * bonus_scale(reward, alpha2 * log_q)
+          metrics[f"{name}/bonus_scale"] = alpha2 / cfg.alpha2 if cfg.alpha2 else jnp.ones(())
+        reward = reward + alpha2 * log_q
       value = self.model.apply(params, n, obs, method=DiscoSyn.value)
       bootstrap = self.model.apply(params, n, self.normalize(env_state.obs, norm),
                                    method=DiscoSyn.value)
@@ -229,7 +232,7 @@ class Trainer:
                                  target=flat(target)))
       env_states.append(env_state)
       norms.append(norm)
-      metrics.update({f"{name}/{k}": v for k, v in _episode_metrics(traj, log_q, cfg.alpha2).items()})
+      metrics.update({f"{name}/{k}": v for k, v in _episode_metrics(traj, log_q, alpha2).items()})
       own_values[name] = _finite_values(traj, env_state.obs)
 
     if self.model.has_discriminator and not cfg.freeze_decoder:
@@ -323,6 +326,12 @@ def gae(reward, value, bootstrap, done, truncation, config: TrainConfig):
   return compute_gae(truncation=truncation, termination=termination, rewards=reward,
                      values=value, bootstrap_value=bootstrap, lambda_=config.gae_lambda,
                      discount=config.discount)
+
+
+def bonus_scale(reward, bonus):
+  """min(1, std(reward) / std(bonus)) over a task's rollout (bonus_cap): 1 where the task's
+  own reward varies at least as much as the bonus, 0 where it pays nothing."""
+  return jnp.minimum(1.0, jnp.std(reward) / jnp.maximum(jnp.std(bonus), 1e-12))
 
 
 def _episode_metrics(traj, log_q, alpha2) -> dict[str, jax.Array]:

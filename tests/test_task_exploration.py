@@ -1,6 +1,8 @@
-"""Each task's own decoder noise (`task_noise`): off, nothing changes; on, each task samples
-and is scored with its own std around the shared decoder's mean, and a task that pays
-narrows its own noise, not that of a task that pays nothing."""
+"""What steers a task's exploration before it is found. Each task's own decoder noise
+(`task_noise`): off, nothing changes; on, each task samples and is scored with its own std
+around the shared decoder's mean, and a task that pays narrows its own noise, not that of a
+task that pays nothing. The bonus capped at what a task pays (`bonus_cap`): a task that pays
+nothing is steered by no bonus."""
 
 import json
 
@@ -14,7 +16,7 @@ from discosyn_jax import config as config_lib
 from discosyn_jax.agent import networks, policy, ppo
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.experiments.method import Method
-from discosyn_jax.training.trainer import Trainer
+from discosyn_jax.training.trainer import Trainer, bonus_scale
 from tests.test_residual import SMALL, TARGET, assert_same_tree, run
 from tests.toy_env import ReachAction
 
@@ -107,3 +109,33 @@ def test_it_is_named_refused_where_there_is_no_decoder_noise_and_one_flag_away(t
   out = tmp_path / "ppo"
   assert cli.main(["train", "--preset", "set1-ppo", "--task-noise", "yes", "--out", str(out)]) == 2
   assert "task_noise" in capsys.readouterr().err and not out.exists()
+
+
+# -- the bonus capped at what a task pays ------------------------------------------------
+def test_the_bonus_scale_is_the_rewards_spread_over_the_bonus_capped_at_one():
+  bonus = jnp.array([0.0, 0.2, 0.0, 0.2])  # std 0.1
+  assert float(bonus_scale(jnp.full(4, -0.3), bonus)) == 0.0  # pays nothing that varies
+  assert float(bonus_scale(jnp.array([0.0, 0.1, 0.0, 0.1]), bonus)) == pytest.approx(0.5)
+  assert float(bonus_scale(jnp.array([0.0, 1.0, 0.0, 1.0]), bonus)) == 1.0
+  assert float(bonus_scale(jnp.array([0.0, 1.0]), jnp.zeros(2))) == 1.0  # no bonus to cap
+
+
+def test_a_task_that_pays_nothing_is_steered_by_no_bonus_under_the_cap():
+  """The unpaid task's bonus is 0 and the paying task keeps one; where no task pays, a run
+  with the cap is the run with alpha2 = 0 exactly, where the paper's constant alpha2 steers
+  the heads by the bonus alone."""
+  _, logs = run(trainer(bonus_cap=True), 2)
+  assert all(float(m["b/bonus_scale"]) == 0.0 and float(m["b/bonus"]) == 0.0 for m in logs)
+  assert all(0.0 < float(m["a/bonus_scale"]) <= 1.0 and float(m["a/bonus"]) != 0.0 for m in logs)
+  unpaid = lambda **c: Trainer(TrainConfig(**{**SMALL, **c}),
+                               envs=[Unpaid(TARGET), Unpaid(-TARGET, obs_size=5)])
+  capped, _ = run(unpaid(bonus_cap=True), 2)
+  no_bonus, _ = run(unpaid(alpha2=0.0), 2)
+  assert_same_tree(capped.params, no_bonus.params)
+  paper, _ = run(unpaid(), 2)
+  heads = lambda state: jax.device_get(state.params["params"]["heads_0"])
+  assert not np.allclose(heads(paper)["MLP_0"]["Dense_2"]["kernel"],
+                         heads(capped)["MLP_0"]["Dense_2"]["kernel"])
+  assert Method.of(TrainConfig(bonus_cap=True)).name.endswith("-bonuscap")
+  with pytest.raises(ValueError, match="bonus_cap"):
+    TrainConfig(bonus_cap=True, decoder="identity", alpha2=0.0, alpha3=0.0).validate()
