@@ -114,22 +114,25 @@ def test_the_planted_lag_study_trains_its_variants_and_reads_them(tmp_path, caps
   assert no_bonus.endswith("| 0.0000 |")  # alpha2 = 0: no bonus paid
 
 
-def test_the_head_floor_study_runs_the_plans_default_row_with_the_floor_on_new_seeds():
-  """Its runs are the confirmation plan's set #2 default row, the floor alone changed, on
+def test_the_unfound_task_study_runs_the_plans_default_row_with_one_change_on_new_seeds():
+  """Its runs are the confirmation plan's set #2 default row, the variant's change alone, on
   seeds no set #2 run of the plan holds, and named so that the report tells them apart."""
   from discosyn_jax.experiments import confirm
   from discosyn_jax.experiments.method import Method
 
-  floor = study("head_floor")
-  plan = confirm.load(ROOT / floor.PLAN)
-  made = list(floor.configs([8, 9]))
+  unfound = study("unfound_task")
+  plan = confirm.load(ROOT / unfound.PLAN)
+  made = list(unfound.configs([8, 9]))
   assert [name for name, _, _ in made] == ["discosyn6-l-reward-zfloor0.7-set2-seed8",
                                            "discosyn6-l-reward-zfloor0.7-set2-seed9"]
   for _, config, meta in made:
     assert config == plan.row("set2-default").run_config(meta["seed"]).replace(z_std_floor=0.7)
     assert Method.parse(meta["method"]) == Method.of(config)
+  (name, config, meta), = unfound.configs([8], "own-noise-capped-bonus")
+  assert name == "discosyn6-l-reward-tasknoise-bonuscap-set2-seed8"
+  assert config == plan.row("set2-default").run_config(8).replace(task_noise=True, bonus_cap=True)
   used = {seed for row in plan.rows if row.name.startswith("set2") for seed in row.seeds}
-  assert not used & {meta["seed"] for _, _, meta in floor.configs([8, 9, 10])}
+  assert not used & {meta["seed"] for _, _, meta in unfound.configs([8, 9, 10])}
 
 
 def test_the_planted_lag_study_reads_a_decoders_reach_along_a_direction():
