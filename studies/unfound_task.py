@@ -7,7 +7,7 @@ plan's default and PPO runs (seeds 3-7, docs/results/confirm-late-residual/):
   floor        each head's z std held at >= 0.7 (1.06 nat per dimension) until its task first
                pays a rollout (`z_std_floor`): every set #2 task, the weight pull too, is
                paid +0.01 in its first rollout, so it holds nothing there
-  own-noise-capped-bonus
+  task-noise-bonus-cap
                each task's own decoder noise (`task_noise`) and its bonus capped at the
                spread of what it pays (`bonus_cap`): on the planted bed it found the unpaid
                task on 2 of the 4 seeds the preset never did; on set #2 the weight pull's
@@ -22,10 +22,12 @@ from __future__ import annotations
 import argparse
 import pathlib
 
+from studies import planted_lag  # its variants' changes (no JAX)
+
 BESIDE = pathlib.Path(__file__).resolve().parents[1] / "docs/results/confirm-late-residual"
 PLAN = BESIDE / "plan.json"  # its set #2 default row, and beside it that row's and PPO's runs
-VARIANTS = {"floor": {"z_std_floor": 0.7},
-            "own-noise-capped-bonus": {"task_noise": True, "bonus_cap": True}}
+# the planted bed's changes of the same names (studies/planted_lag.py)
+VARIANTS = {name: planted_lag.VARIANTS[name] for name in ("floor", "task-noise-bonus-cap")}
 
 
 def configs(seeds, variant: str = "floor", steps: int | None = None):

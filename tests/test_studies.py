@@ -128,7 +128,7 @@ def test_the_unfound_task_study_runs_the_plans_default_row_with_one_change_on_ne
   for _, config, meta in made:
     assert config == plan.row("set2-default").run_config(meta["seed"]).replace(z_std_floor=0.7)
     assert Method.parse(meta["method"]) == Method.of(config)
-  (name, config, meta), = unfound.configs([8], "own-noise-capped-bonus")
+  (name, config, meta), = unfound.configs([8], "task-noise-bonus-cap")
   assert name == "discosyn6-l-reward-tasknoise-bonuscap-set2-seed8"
   assert config == plan.row("set2-default").run_config(8).replace(task_noise=True, bonus_cap=True)
   used = {seed for row in plan.rows if row.name.startswith("set2") for seed in row.seeds}

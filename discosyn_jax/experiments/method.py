@@ -9,9 +9,9 @@ A name, part by part: the family and its number of synergies ('DiscoSyn3'); the 
 decoder that copies a learned run's update (the parts after it are that run's); the
 decoder's start where not random ('-reward', '-objects'); its weight decay ('-wd8a200':
 8, falling to nothing over 200 train steps); '-zfree' where the heads' z is unbounded; a
-study's own label parts ('-alpha3=0.1') and a floor on the heads' z std until paid
-('-zfloor0.7') each task's own decoder noise ('-tasknoise') and its bonus capped at what it pays
-('-bonuscap'); a residual beside the synergies ('-res0.3r150s400':
+study's own label parts ('-alpha3=0.1'); a floor on the heads' z std until paid
+('-zfloor0.7'), each task's own decoder noise ('-tasknoise') and its bonus capped at what it
+pays ('-bonuscap'); a residual beside the synergies ('-res0.3r150s400':
 its cap, ramp and start in the run's train steps); and ' frozen' for that space frozen and
 used on other tasks, with the residual it acts with there ('... frozen-res0.3r150')."""
 

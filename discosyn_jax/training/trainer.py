@@ -219,8 +219,9 @@ class Trainer:
       if self.model.has_discriminator:
         log_q = ppo.discriminator_log_prob(self.model, params, traj["z"], traj["action"])
         if cfg.bonus_cap:
-          alpha2 = alpha2 * bonus_scale(reward, alpha2 * log_q)
-          metrics[f"{name}/bonus_scale"] = alpha2 / cfg.alpha2 if cfg.alpha2 else jnp.ones(())
+          scale = bonus_scale(reward, alpha2 * log_q)
+          alpha2 = alpha2 * scale
+          metrics[f"{name}/bonus_scale"] = scale
         reward = reward + alpha2 * log_q
       value = self.model.apply(params, n, obs, method=DiscoSyn.value)
       bootstrap = self.model.apply(params, n, self.normalize(env_state.obs, norm),
@@ -330,8 +331,10 @@ def gae(reward, value, bootstrap, done, truncation, config: TrainConfig):
 
 def bonus_scale(reward, bonus):
   """min(1, std(reward) / std(bonus)) over a task's rollout (bonus_cap): 1 where the task's
-  own reward varies at least as much as the bonus, 0 where it pays nothing."""
-  return jnp.minimum(1.0, jnp.std(reward) / jnp.maximum(jnp.std(bonus), 1e-12))
+  own reward varies at least as much as the bonus, or where there is no bonus to cap; 0
+  where the task pays nothing."""
+  spread = jnp.std(bonus)
+  return jnp.where(spread > 0, jnp.minimum(1.0, jnp.std(reward) / jnp.maximum(spread, 1e-12)), 1.0)
 
 
 def _episode_metrics(traj, log_q, alpha2) -> dict[str, jax.Array]:
