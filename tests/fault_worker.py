@@ -182,15 +182,18 @@ def stop_in_finalizer() -> None:
   logs.TensorBoard.write = write_dropping_one
 
 
+SAVES_KEEP = 2  # periodic checkpoints the saving worker keeps, besides final/
+
+
 def saves(run_dir: pathlib.Path) -> None:
   checkpoints.tidy(run_dir)
   newest = checkpoints.latest(run_dir)
   step = checkpoints.verify(newest) + 1 if newest else 1
   print("ready", flush=True)
   while True:
-    checkpoints.save(run_dir, small_state(step), keep=2)
+    checkpoints.save(run_dir, small_state(step), keep=SAVES_KEEP)
     if step % 2 == 0:
-      checkpoints.save(run_dir, small_state(step), keep=2, final=True)
+      checkpoints.save(run_dir, small_state(step), keep=SAVES_KEEP, final=True)
     print(step, flush=True)
     step += 1
 
