@@ -16,6 +16,7 @@ from discosyn_jax import config as config_lib
 from discosyn_jax.agent import networks, policy, ppo
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.experiments.method import Method
+from discosyn_jax.synergies import fitting
 from discosyn_jax.training.trainer import Trainer, bonus_scale
 from tests.test_residual import SMALL, TARGET, assert_same_tree, run
 from tests.toy_env import ReachAction
@@ -109,6 +110,24 @@ def test_it_is_named_refused_where_there_is_no_decoder_noise_and_one_flag_away(t
   out = tmp_path / "ppo"
   assert cli.main(["train", "--preset", "set1-ppo", "--task-noise", "yes", "--out", str(out)]) == 2
   assert "task_noise" in capsys.readouterr().err and not out.exists()
+
+
+def test_its_synergies_frozen_elsewhere_give_each_new_task_its_own_noise(tmp_path):
+  """The decoder of a run with its tasks' own noise never trained its own std: frozen on a
+  new task, the new task learns its own noise rather than act with that untrained one."""
+  t = trainer(task_noise=True)
+  params = t.initial_params()["params"]
+  path = fitting.save(tmp_path / "own-noise.npz", params["synergy_decoder"],
+                      fitting.meta_of(t.config), decoder_init=t.config.decoder_init)
+  meta, _ = fitting.read(path)
+  assert Method.of(meta).name.endswith("-tasknoise")  # the frozen rows say what it was
+  frozen = TrainConfig(**{**SMALL, **fitting.frozen_fields(meta, path), "tasks": ("a",)}).validate()
+  assert frozen.task_noise and frozen.freeze_decoder
+  target = Trainer(frozen, envs=[ReachAction(TARGET)])
+  assert "task_log_stds" in target.initial_params()["params"]
+  shared = fitting.save(tmp_path / "shared.npz", params["synergy_decoder"],
+                        fitting.meta_of(trainer().config), decoder_init="random")
+  assert fitting.frozen_fields(fitting.read(shared)[0], shared)["task_noise"] is False
 
 
 # -- the bonus capped at what a task pays ------------------------------------------------

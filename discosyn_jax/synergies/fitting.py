@@ -43,8 +43,12 @@ def architecture(fields: dict[str, Any]) -> dict[str, Any]:
 
 def meta_of(config) -> dict[str, Any]:
   """A run's decoder as a synergy file's meta: its architecture and its start (the start
-  names the rows that freeze it, experiments/method.py)."""
-  return {k: getattr(config, k) for k in (*ARCHITECTURE, "decoder_init")}
+  names the rows that freeze it, experiments/method.py). A run whose tasks each had their own
+  noise (`task_noise`) says so: its decoder's own noise was never trained."""
+  meta = {k: getattr(config, k) for k in (*ARCHITECTURE, "decoder_init")}
+  if config.task_noise:
+    meta["task_noise"] = True
+  return meta
 _RUN_DECODER = "params.params.synergy_decoder."
 
 
@@ -208,7 +212,8 @@ def save(path: pathlib.Path, params: dict, fields: dict[str, Any], **meta) -> pa
   path.parent.mkdir(parents=True, exist_ok=True)
   flat = {".".join(str(getattr(k, "key", k)) for k in keys): np.asarray(leaf)
           for keys, leaf in jax.tree_util.tree_flatten_with_path(params)[0]}
-  info = {**architecture(fields), **meta}
+  noise = {"task_noise": True} if fields.get("task_noise") else {}  # meta_of: its noise untrained
+  info = {**architecture(fields), **noise, **meta}
   fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz")
   with os.fdopen(fd, "wb") as f:
     np.savez(f, meta=np.array(json.dumps(info)), **flat)
@@ -310,9 +315,10 @@ def frozen_fields(meta: dict[str, Any], path) -> dict[str, Any]:
   """The TrainConfig fields of a run in the frozen synergy space of `path` (its `meta` as
   `read` gives it): the decoder's architecture, frozen, no discriminator bonus and no
   decoder entropy (constants here). Fitted PCA / autoencoder spaces act with their mean
-  (no noise outside the space); a DiscoSyn decoder keeps the noise it learned."""
+  (no noise outside the space); a DiscoSyn decoder keeps the noise it learned, or, where its
+  tasks each learned their own (`task_noise`), each new task learns its own."""
   source = str(path) if shipped_name(path) else str(pathlib.Path(path).resolve())
-  return dict(architecture(meta), decoder_from=source,
+  return dict(architecture(meta), decoder_from=source, task_noise=bool(meta.get("task_noise")),
               freeze_decoder=True, decoder_noise="method" not in meta, alpha2=0.0, alpha3=0.0,
               decoder_weight_decay=0.0, decoder_weight_decay_steps=0, decoder_init="random")
 
