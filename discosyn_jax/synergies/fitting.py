@@ -41,14 +41,17 @@ def architecture(fields: dict[str, Any]) -> dict[str, Any]:
   return {k: fields[k] for k in ARCHITECTURE}
 
 
+def described(fields: dict[str, Any]) -> dict[str, Any]:
+  """What a synergy file says of its decoder: its ARCHITECTURE, and `task_noise` where the
+  run's tasks each had their own noise (the decoder's own noise was then never trained)."""
+  return {**architecture(fields), **({"task_noise": True} if fields.get("task_noise") else {})}
+
+
 def meta_of(config) -> dict[str, Any]:
-  """A run's decoder as a synergy file's meta: its architecture and its start (the start
-  names the rows that freeze it, experiments/method.py). A run whose tasks each had their own
-  noise (`task_noise`) says so: its decoder's own noise was never trained."""
-  meta = {k: getattr(config, k) for k in (*ARCHITECTURE, "decoder_init")}
-  if config.task_noise:
-    meta["task_noise"] = True
-  return meta
+  """A run's decoder as a synergy file's meta: what `described` says of it and its start
+  (the start names the rows that freeze it, experiments/method.py)."""
+  fields = {k: getattr(config, k) for k in (*ARCHITECTURE, "task_noise")}
+  return {**described(fields), "decoder_init": config.decoder_init}
 _RUN_DECODER = "params.params.synergy_decoder."
 
 
@@ -212,8 +215,7 @@ def save(path: pathlib.Path, params: dict, fields: dict[str, Any], **meta) -> pa
   path.parent.mkdir(parents=True, exist_ok=True)
   flat = {".".join(str(getattr(k, "key", k)) for k in keys): np.asarray(leaf)
           for keys, leaf in jax.tree_util.tree_flatten_with_path(params)[0]}
-  noise = {"task_noise": True} if fields.get("task_noise") else {}  # meta_of: its noise untrained
-  info = {**architecture(fields), **noise, **meta}
+  info = {**described(fields), **meta}
   fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz")
   with os.fdopen(fd, "wb") as f:
     np.savez(f, meta=np.array(json.dumps(info)), **flat)
