@@ -43,7 +43,7 @@ def frozen_meta(source: pathlib.Path, config) -> dict:
   from discosyn_jax.run import layout
 
   meta = json.loads((source / layout.EXPERIMENT_FILE).read_text())
-  method = Method.parse(meta["method"]).replace(frozen_residual=Residual.of(config))
+  method = Method.parse(meta["method"]).replace(acting_residual=Residual.of(config))
   meta["method"] = method.name
   return meta
 

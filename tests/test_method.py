@@ -37,8 +37,8 @@ def test_every_committed_config_loads_under_this_release():
 
 def test_a_name_reads_as_its_parts():
   m = Method.parse("DiscoSyn3-L-reward-res0.3r150 frozen-res1r150")
-  assert (m.family, m.synergies, m.decoder, m.start, m.frozen) == ("DiscoSyn", 3, "L", "reward", True)
-  assert m.residual == Residual(0.3, 150) and m.frozen_residual == Residual(1.0, 150)
+  assert (m.family, m.synergies, m.decoder, m.start, m.reuse) == ("DiscoSyn", 3, "L", "reward", "frozen")
+  assert m.residual == Residual(0.3, 150) and m.acting_residual == Residual(1.0, 150)
   m = Method.parse("Random3-L-matched-wd8a200")
   assert (m.family, m.control, m.decay, m.decay_steps) == ("Random", "matched", 8.0, 200)
   assert Method.parse("DiscoSyn3-L-alpha3=0.1").tag == ("alpha3=0.1",)
@@ -64,6 +64,20 @@ def test_a_config_names_its_method():
   frozen = set1.replace(decoder_from="/nowhere/decoder.npz", freeze_decoder=True, residual=0.3,
                         residual_ramp=0.5, steps=300)
   assert report_runs.method_of(frozen).name == "DiscoSyn3-L-reward frozen-res0.3r150"
+
+
+def test_a_space_learned_on_elsewhere_is_tuned_with_its_own_switches_not_frozen():
+  source = ROOT / "docs/results/paper/discosyn3-l-reward-set1-seed0/decoder.npz"
+  unseen = presets.preset("set1-disco3-linear-reward").replace(
+      tasks=("valve_cylinder", "valve_cw"), decoder_from=str(source), decoder_init="random")
+  tuned = report_runs.method_of(unseen.replace(task_noise=True, bonus_cap=True))
+  # a decoder file says its architecture, not its start: the source is DiscoSyn3-L
+  assert tuned.name == "DiscoSyn3-L-tasknoise-bonuscap tuned"
+  assert Method.parse(tuned.name) == tuned and tuned.plain == Method("DiscoSyn", 3, "L")
+  frozen = unseen.replace(freeze_decoder=True, alpha2=0.0, alpha3=0.0)
+  assert report_runs.method_of(frozen).name == "DiscoSyn3-L frozen"
+  with pytest.raises(ValueError, match="reuse"):
+    Method("DiscoSyn", 3, "L", reuse="thawed")
 
 
 def test_the_report_orders_rows_by_rank():

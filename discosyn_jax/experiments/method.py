@@ -1,5 +1,5 @@
 """What a run is, as a value: a `Method` (family, synergies, decoder, start, decay, control,
-residual, frozen) whose `.name` is the row name the records carry ('PPO', 'PCA4',
+residual, reuse) whose `.name` is the row name the records carry ('PPO', 'PCA4',
 'DiscoSyn3-L-reward', 'Random3-L-zfree-res0.3r150', 'DiscoSyn3-L-reward frozen'), read back
 by `Method.parse`; `Method.of(config)` names what a config runs; `rank` is the order of the
 report's rows. The planner builds Methods, the report groups and orders runs by them.
@@ -13,7 +13,8 @@ study's own label parts ('-alpha3=0.1'); a floor on the heads' z std until paid
 ('-zfloor0.7'), each task's own decoder noise ('-tasknoise') and its bonus capped at what it
 pays ('-bonuscap'); a residual beside the synergies ('-res0.3r150s400':
 its cap, ramp and start in the run's train steps); and ' frozen' for that space frozen and
-used on other tasks, with the residual it acts with there ('... frozen-res0.3r150')."""
+used on other tasks, or ' tuned' for it learned on there (a run's decoder_from, not frozen),
+with the residual it acts with there ('... frozen-res0.3r150')."""
 
 from __future__ import annotations
 
@@ -28,6 +29,7 @@ FAMILIES = ("PPO", "PCA", "AE", "DiscoSyn", "Random", "Prior")
 DECODERS = {"linear": "L", "mlp": "NL"}
 STARTS = ("reward", "objects")  # a decoder's start as the name says it; random says nothing
 CONTROLS = ("matched", "zfree")
+REUSES = ("frozen", "tuned")  # how a space learned on some tasks is used on others
 
 
 @dataclasses.dataclass(frozen=True)
@@ -58,7 +60,7 @@ class Residual:
 _RESIDUAL = re.compile(r"res(?P<cap>\d+(?:\.\d+)?)(?:r(?P<ramp>\d+))?(?:s(?P<start>\d+))?")
 _DECAY = re.compile(r"wd(?P<decay>\d+(?:\.\d+)?)(?:a(?P<steps>\d+))?")
 _NAME = re.compile(r"(?P<family>" + "|".join(FAMILIES) + r")(?P<b>\d*)(?:-(?P<decoder>L|NL))?"
-                   r"(?P<parts>(?:-[^ ]+)?)(?P<frozen> frozen(?P<acting>-\S+)?)?")
+                   r"(?P<parts>(?:-[^ ]+)?)(?: (?P<reuse>" + "|".join(REUSES) + r")(?P<acting>-\S+)?)?")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -72,12 +74,14 @@ class Method:
   decay_steps: int = 0
   tag: tuple[str, ...] = ()  # a study's own label parts
   residual: Residual | None = None
-  frozen: bool = False  # this space frozen, used on other tasks
-  frozen_residual: Residual | None = None  # the residual the frozen space acts with
+  reuse: str = ""  # this space used on other tasks (REUSES): frozen, or tuned (learned on)
+  acting_residual: Residual | None = None  # the residual the reused space acts with there
 
   def __post_init__(self):
     if self.family not in FAMILIES:
       raise ValueError(f"unknown method family {self.family!r}; families: {', '.join(FAMILIES)}")
+    if self.reuse not in ("", *REUSES):
+      raise ValueError(f"unknown reuse {self.reuse!r}; one of: {', '.join(REUSES)}")
 
   @property
   def name(self) -> str:
@@ -90,8 +94,8 @@ class Method:
     name += "-zfree" if self.control == "zfree" else ""
     name += "".join(f"-{part}" for part in self.tag)
     name += self.residual.name if self.residual else ""
-    if self.frozen:
-      name += " frozen" + (self.frozen_residual.name if self.frozen_residual else "")
+    if self.reuse:
+      name += f" {self.reuse}" + (self.acting_residual.name if self.acting_residual else "")
     return name
 
   def __str__(self) -> str:
@@ -111,7 +115,7 @@ class Method:
       raise ValueError(f"{name!r} is not a method's name (e.g. PPO, PCA4, DiscoSyn3-L-reward, "
                        "Random3-L-zfree, DiscoSyn3-L-reward frozen)")
     fields: dict[str, Any] = dict(family=match["family"], synergies=int(match["b"] or 0),
-                                  decoder=match["decoder"] or "", frozen=bool(match["frozen"]))
+                                  decoder=match["decoder"] or "", reuse=match["reuse"] or "")
     tag = []
     for part in match["parts"].split("-")[1:]:
       residual, decay = _RESIDUAL.fullmatch(part), _DECAY.fullmatch(part)
@@ -128,9 +132,9 @@ class Method:
     if match["acting"]:
       acting = _RESIDUAL.fullmatch(match["acting"][1:])
       if not acting:
-        raise ValueError(f"{name!r}: a frozen method acts with a residual ('-res0.3r150'), "
+        raise ValueError(f"{name!r}: a method used on other tasks acts with a residual ('-res0.3r150'), "
                          f"not {match['acting'][1:]!r}")
-      fields["frozen_residual"] = _residual(acting)
+      fields["acting_residual"] = _residual(acting)
     method = cls(**fields, tag=tuple(tag))
     if method.name != name:  # parts out of their order, or a residual not last
       raise ValueError(f"{name!r} is not a method's name as written: its parts in order "
@@ -168,7 +172,7 @@ class Method:
   @property
   def plain(self) -> Method:
     """The method without its residual, tag or freezing: the row it belongs to."""
-    return self.replace(tag=(), residual=None, frozen=False, frozen_residual=None)
+    return self.replace(tag=(), residual=None, reuse="", acting_residual=None)
 
   def rank(self) -> tuple:
     """The report's order: PPO, the fitted spaces (PCA, AE by size), then per number of

@@ -365,7 +365,7 @@ class Planner:
     config = self._config(base, task_set, **changes)
     # named by its source row and its own residual: "DiscoSyn3-L-reward frozen",
     # "DiscoSyn3-L-reward-res0.3r150 frozen-res0.3r150"
-    method = method.replace(frozen=True, frozen_residual=Residual.of(config))
+    method = method.replace(reuse="frozen", acting_residual=Residual.of(config))
     # folders: transfer-synergies-set1-seed0 (unseen tasks of set #1), sparse-synergies-seed0,
     # transfer-synergies-residual-set1-seed0
     label = task_set.removeprefix("unseen-")

@@ -346,7 +346,7 @@ def default_method(task_set: str, methods) -> Method | None:
 
   source = paper.TRANSFER_FROM.get(task_set)
   rows = paper.PAPER_ROWS.get(source[0] if source else task_set, ())
-  wanted = [rows[0].replace(frozen=bool(source))] if rows else []
+  wanted = [rows[0].replace(reuse="frozen" if source else "")] if rows else []
   found = [m for m in wanted + order(methods) if m in methods and m.family == "DiscoSyn"]
   return found[0] if found else None
 

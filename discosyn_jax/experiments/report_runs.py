@@ -73,12 +73,18 @@ def method_of(config: TrainConfig) -> Method:
 
   if not config.decoder_from or config.decoder == "identity":
     return Method.of(config)
-  # a frozen space, named by its source and the residual it acts with here
-  frozen = dict(frozen=True, frozen_residual=Residual.of(config))
+  # a space from elsewhere, named by its source, how it is used here (frozen, or learned on
+  # with this run's own switches) and the residual it acts with here
+  own = Method.of(config)
+  reused = dict(reuse="frozen" if config.freeze_decoder else "tuned",
+                acting_residual=Residual.of(config))
   try:  # a synergy file knows its method (PCA, AE); a run folder is DiscoSyn's
-    return Method.of(fitting.read(config.decoder_from)[0]).replace(**frozen)
+    source = Method.of(fitting.read(config.decoder_from)[0])
   except ValueError:
-    return Method.of(config).replace(residual=None, **frozen)
+    return own.replace(residual=None, **reused)
+  if not config.freeze_decoder:
+    reused["tag"] = source.tag + tuple(part for part in own.tag if part not in source.tag)
+  return source.replace(**reused)
 
 
 def set_of(config: TrainConfig) -> str:
