@@ -172,3 +172,22 @@ def test_the_solving_reach_study_measures_the_distance_to_a_decoders_box():
   assert reach.distance(kernel, bias, np.concatenate([past, off])) == pytest.approx(
       (np.sqrt(0.4 ** 2 / 20) + np.sqrt(0.2 ** 2 / 20)) / 2)
   assert reach.distance(kernel, bias + 0.1, inside + 0.1) == pytest.approx(0.0, abs=1e-9)
+
+
+def test_the_transfer_learned_study_learns_on_the_frozen_transfers_run(tmp_path):
+  from discosyn_jax.experiments import record
+
+  module = study("transfer_learned")
+  source = ROOT / "docs/results/paper/discosyn3-l-reward-set1-seed1"
+  frozen = record.saved_config(ROOT / "docs/results/paper/transfer-synergies-set1-seed1")
+  tuned = module.row_config("tuned", 1, source)
+  # the frozen transfer's run with its decoder learned on, and nothing else of the run moved
+  assert tuned.replace(freeze_decoder=True, alpha2=0.0, alpha3=0.0, closing_episodes=0,
+                       checkpoint_every=100, decoder_from=frozen.decoder_from) == frozen
+  assert tuned.decoder_from == str((source / "decoder.npz").resolve())
+  both = module.row_config("tuned-tncap", 1, source)
+  assert both == tuned.replace(task_noise=True, bonus_cap=True)
+  scratch = module.row_config("scratch", 1, None)
+  assert (scratch.decoder_from, scratch.decoder_init, scratch.tasks) == ("", "reward", frozen.tasks)
+  with pytest.raises(SystemExit):
+    module.main(["--rows", "frozen-from", "--out", str(tmp_path)])  # no --source
