@@ -5,6 +5,7 @@ decoder, the sparse-reward comparison and the report."""
 import io
 import json
 import math
+import pathlib
 import shutil
 
 import jax
@@ -552,3 +553,26 @@ def test_a_set_of_ones_own_tasks_is_named_by_its_classes_and_its_figures_link_as
   assert report_runs.set_of(TrainConfig(squash_z=False, decoder_init="random", tasks=("valve0", "valve1", "valve2", "valve3"))) == "set1"
   assert report.figure_name("curves", "Press+Rake") == "curves-Press_Rake.png"
   assert report.figure_name("overlap", "set1 on leap16") == "overlap-set1_on_leap16.png"
+
+
+def test_a_kept_run_names_a_source_run_folder_by_its_sibling_too(tmp_path):
+  """`discosyn train --decoder-from RUN_FOLDER` saves the folder's path: kept beside its
+  source, the record names it by the sibling folder and reads it there."""
+  records = pathlib.Path(__file__).resolve().parents[1] / "docs/results/paper"
+  out = tmp_path / "out"
+  for name in ("discosyn3-l-reward-set1-seed0", "transfer-synergies-set1-seed0"):
+    shutil.copytree(records / name, out / name)
+  config_file = out / "transfer-synergies-set1-seed0" / "config.json"
+  fields = json.loads(config_file.read_text())
+  fields["decoder_from"] = "/elsewhere/runs/discosyn3-l-reward-set1-seed0"  # made on another machine
+  config_file.write_text(json.dumps(fields))
+  assert record.saved_config(out / "transfer-synergies-set1-seed0").decoder_from == str(
+      (out / "discosyn3-l-reward-set1-seed0").resolve())
+  record.keep(out, tmp_path / "kept", log=lambda *_: None)
+  kept = json.loads((tmp_path / "kept/transfer-synergies-set1-seed0/config.json").read_text())
+  assert kept["decoder_from"] == "../discosyn3-l-reward-set1-seed0"
+  # a shipped synergy name is no sibling's, and a file beside it is still named by its folder
+  assert record.saved_config(out / "discosyn3-l-reward-set1-seed0").decoder_from == ""
+  fields["decoder_from"] = "shadow20-set1"
+  config_file.write_text(json.dumps(fields))
+  assert record.saved_config(out / "transfer-synergies-set1-seed0").decoder_from == "shadow20-set1"

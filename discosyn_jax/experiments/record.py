@@ -119,13 +119,19 @@ def saved_config(run_dir: pathlib.Path) -> TrainConfig:
   if not config.decoder_from:
     return config
   sibling = _sibling(run_dir, config.decoder_from)
-  return config.replace(decoder_from=str(sibling)) if sibling.is_file() else config
+  return config.replace(decoder_from=str(sibling)) if sibling else config
 
 
-def _sibling(run_dir: pathlib.Path, decoder_from: str) -> pathlib.Path:
-  """Where `decoder_from` (<folder>/<file>, wherever it was made) lies beside `run_dir`."""
+def _sibling(run_dir: pathlib.Path, decoder_from: str) -> pathlib.Path | None:
+  """Where `decoder_from` (<folder>/<file>, or a run's <folder>, wherever it was made) lies
+  beside `run_dir`, if it does; never for a shipped synergy name (one part)."""
   source = pathlib.Path(decoder_from)
-  return pathlib.Path(run_dir).resolve().parent / source.parent.name / source.name
+  beside = pathlib.Path(run_dir).resolve().parent
+  if len(source.parts) < 2:
+    return None
+  sibling = (beside / source.parent.name / source.name if source.suffix == ".npz"
+             else beside / source.name)
+  return sibling if sibling.exists() else None
 
 
 def complete(run_dir: pathlib.Path, config: TrainConfig) -> bool:
@@ -171,8 +177,8 @@ def _relative_decoder_from(folder: pathlib.Path, config_file: pathlib.Path) -> N
   if not fields.get("decoder_from"):
     return
   sibling = _sibling(folder, fields["decoder_from"])
-  if sibling.is_file():
-    fields["decoder_from"] = f"../{sibling.parent.name}/{sibling.name}"
+  if sibling:
+    fields["decoder_from"] = "../" + sibling.relative_to(folder.resolve().parent).as_posix()
     atomic.write_text(config_file, json.dumps(fields, indent=1))
 
 
