@@ -56,7 +56,9 @@ def row_config(row: str, seed: int, source: pathlib.Path | None):
 
 def train_row(out: pathlib.Path, row: str, seed: int, source: pathlib.Path | None,
               log=print) -> pathlib.Path:
-  from discosyn_jax.experiments import paper, report_runs
+  """Train (or keep, or resume) ROWS[row] for `seed` as the step <row>-seed<n> of OUT."""
+  from discosyn_jax.experiments import report_runs
+  from studies.residual_transfer import train_row as train_step
 
   if source is not None:  # its source beside it, where the config will look for it
     sibling = out / source.name
@@ -68,13 +70,16 @@ def train_row(out: pathlib.Path, row: str, seed: int, source: pathlib.Path | Non
   sparse = row == "sparse-from"  # named as the paper's rows of these tasks are
   meta = dict(experiment="sparse" if sparse else "transfer", method=report_runs.method_of(config).name,
               set="sparse" if sparse else "unseen-set1", seed=seed, scale="cpu")
-  step = paper.Train(name, config, meta)
-  if step.done(out):
-    step.settle(out, log)
-  else:
-    log(f"[{name}] train")
-    step.run(out, False, log)
-  return out / name
+  log(f"[{name}]")
+  return train_step(out, name, config, meta)
+
+
+def source_of(row: str, seed: int, given: pathlib.Path | None) -> pathlib.Path | None:
+  """The folder whose decoder a row starts from: --source for FROM's rows, each seed's set #1
+  default for the tuned rows, none for scratch."""
+  if row in FROM:
+    return given
+  return SOURCES / f"discosyn3-l-reward-set1-seed{seed}" if row.startswith("tuned") else None
 
 
 def spans(folders) -> list[str]:
@@ -102,7 +107,7 @@ def main(argv=None) -> None:
   parser.add_argument("--rows", nargs="+", choices=list(ROWS), default=["tuned", "tuned-tncap", "scratch"])
   parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
   parser.add_argument("--source", type=pathlib.Path,
-                      help="frozen-from: the run (or record) folder whose decoder is frozen")
+                      help="frozen-from, sparse-from: the run (or record) folder whose decoder is frozen")
   parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("runs/transfer-learned"))
   parser.add_argument("--span", type=pathlib.Path, nargs="+", metavar="FOLDER",
                       help="no training: the span table of the decoders in these folders")
@@ -115,9 +120,7 @@ def main(argv=None) -> None:
   args.out.mkdir(parents=True, exist_ok=True)
   for seed in args.seeds:
     for row in args.rows:
-      source = (args.source if row in FROM else
-                SOURCES / f"discosyn3-l-reward-set1-seed{seed}" if row.startswith("tuned") else None)
-      train_row(args.out, row, seed, source)
+      train_row(args.out, row, seed, source_of(row, seed, args.source))
 
 
 if __name__ == "__main__":

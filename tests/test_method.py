@@ -39,6 +39,7 @@ def test_a_name_reads_as_its_parts():
   m = Method.parse("DiscoSyn3-L-reward-res0.3r150 frozen-res1r150")
   assert (m.family, m.synergies, m.decoder, m.start, m.reuse) == ("DiscoSyn", 3, "L", "reward", "frozen")
   assert m.residual == Residual(0.3, 150) and m.acting_residual == Residual(1.0, 150)
+  assert m.frozen and m.frozen_residual == m.acting_residual  # the names before, one release
   m = Method.parse("Random3-L-matched-wd8a200")
   assert (m.family, m.control, m.decay, m.decay_steps) == ("Random", "matched", 8.0, 200)
   assert Method.parse("DiscoSyn3-L-alpha3=0.1").tag == ("alpha3=0.1",)

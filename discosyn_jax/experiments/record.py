@@ -126,9 +126,9 @@ def _sibling(run_dir: pathlib.Path, decoder_from: str) -> pathlib.Path | None:
   """Where `decoder_from` (<folder>/<file>, or a run's <folder>, wherever it was made) lies
   beside `run_dir`, if it does; never for a shipped synergy name (one part)."""
   source = pathlib.Path(decoder_from)
-  beside = pathlib.Path(run_dir).resolve().parent
   if len(source.parts) < 2:
     return None
+  beside = pathlib.Path(run_dir).resolve().parent
   sibling = (beside / source.parent.name / source.name if source.suffix == ".npz"
              else beside / source.name)
   return sibling if sibling.exists() else None
