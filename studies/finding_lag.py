@@ -47,7 +47,9 @@ def term(task: str) -> str:
   if task.startswith("planted"):
     return PLANTED_TERM
   raise ValueError(f"finding_lag knows no reward term of {task!r}; known: {', '.join(TERM)}, planted*")
-FOUND = 0.8
+
+
+FOUND = 0.8  # success at which a task counts as found
 
 
 def runs(folders, task_set: str = "set2") -> list:
@@ -57,11 +59,10 @@ def runs(folders, task_set: str = "set2") -> list:
   return [r for r in found if r.task_set == task_set and r.finished]
 
 
-def found_at(run, task: str) -> float | None:
-  for row in run.evaluations:
-    if row.get(f"{task}/success", 0.0) >= FOUND:
-      return run.per_task_env_steps(row)
-  return None
+def found_at(run, task: str) -> int | None:
+  from discosyn_jax.experiments import report
+
+  return report.steps_to(run, task, FOUND)
 
 
 def window_rows(run, window: int) -> list[dict]:
