@@ -191,3 +191,58 @@ def test_the_transfer_learned_study_learns_on_the_frozen_transfers_run(tmp_path)
   assert (scratch.decoder_from, scratch.decoder_init, scratch.tasks) == ("", "reward", frozen.tasks)
   with pytest.raises(SystemExit):
     module.main(["--rows", "frozen-from", "--out", str(tmp_path)])  # no --source
+
+
+def test_the_task_alone_study_trains_the_plans_set2_rows_on_one_task_beside_the_set():
+  """Its runs are the plan's set #2 default and PPO rows with the task alone, nothing else
+  changed; its table puts each row's runs alone beside its runs inside the set, the env steps
+  of the task to 0.8 read the same way for both."""
+  from discosyn_jax.experiments import confirm, report_runs
+  from discosyn_jax.experiments.method import Method
+
+  alone = study("task_alone")
+  plan = confirm.load(alone.PLAN)
+  made = list(alone.configs("dice", [0]))
+  assert [name for name, _, _ in made] == ["discosyn6-l-reward-dice-seed0", "ppo-dice-seed0"]
+  for (_, config, meta), row in zip(made, alone.ROWS):
+    assert config == plan.row(row).run_config(0).replace(tasks=("dice",))
+    assert (meta["set"], Method.parse(meta["method"])) == ("dice", Method.of(config))
+  assert alone._methods() == {"DiscoSyn6-L-reward", "PPO"}
+
+  config = made[0][1]
+
+  def run(seed, successes, task_set):
+    evaluations = [{"step": 50 * (i + 1), "dice/success": s} for i, s in enumerate(successes)]
+    return report_runs.Run(path=pathlib.Path("x"), config=config, evaluations=evaluations,
+                           metrics=[], experiment="task-alone", method=Method.of(config),
+                           task_set=task_set, seed=seed, scale="cpu")
+
+  lines = alone.table([run(0, [0.1, 0.9, 0.8, 0.7], "dice")],
+                      [run(11, [0.0, 0.2, 0.4, 0.6], "set2")], "dice")
+  per_step = config.num_envs * config.unroll_length
+  assert lines[2] == (f"| DiscoSyn6-L-reward | alone | 0 | 0.62 (**0.62**) | 0.80 (**0.80**) | "
+                      f"{100 * per_step / 1e6:.2f} (1 of 1) |")
+  assert lines[3] == ("| DiscoSyn6-L-reward | in set #2 | 11 | 0.30 (**0.30**) | "
+                      "0.40 (**0.40**) | - (0 of 1) |")
+
+
+def test_the_task_alone_study_learns_on_from_a_set2_decoder_copied_beside_its_runs(tmp_path):
+  """--sources: the default row on the task alone, its decoder learned on from the set #2
+  run's, the seed the source's; the source's record copied beside so a kept run names it by
+  its sibling folder, not by a path of the machine."""
+  from discosyn_jax.experiments import confirm
+
+  alone = study("task_alone")
+  source = alone.BESIDE[1] / "set2-default-seed11"
+  (name, config, meta), = alone.from_set("dice", [source], tmp_path)
+  assert name == "discosyn6-l-reward-tuned-dice-seed11"
+  assert meta["method"] == "DiscoSyn6-L-reward tuned" and meta["seed"] == 11
+  copied = tmp_path / source.name / "decoder.npz"
+  assert copied.read_bytes() == (source / "decoder.npz").read_bytes()
+  row = confirm.load(alone.PLAN).row("set2-default").run_config(11)
+  assert config == row.replace(tasks=("dice",), decoder_init="random",
+                               decoder_from=str(copied.resolve()))
+  assert not config.freeze_decoder and config.alpha2 == row.alpha2
+  with pytest.raises(SystemExit) as stop:
+    alone.main(["--seeds", "--sources", str(tmp_path / "nothing"), "--out", str(tmp_path)])
+  assert stop.value.code == 2
