@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import pathlib
-import shutil
 
 import numpy as np
 
@@ -52,12 +51,11 @@ def from_set(task: str, sources, out: pathlib.Path, steps: int | None = None):
   learned on from each set #2 source's (its seed the source's). Each source's record is
   copied beside the runs, so that a kept run names its decoder by that sibling folder."""
   from discosyn_jax.experiments import confirm, record
+  from studies.transfer_learned import beside
 
   row = confirm.load(PLAN).row(ROWS[0])
   for given in sources:
-    source = out / given.name
-    if not source.is_dir():
-      shutil.copytree(given, source, ignore=shutil.ignore_patterns("checkpoints", "final", "tb"))
+    source = beside(out, given)
     seed = record.saved_config(source).seed
     yield _step(row.run_config(seed).replace(
         tasks=(task,), decoder_init="random",
@@ -115,7 +113,7 @@ def main(argv=None) -> None:
                       help="set #2 runs (or records) whose decoders the default row learns on from")
   parser.add_argument("--synergies", type=int,
                       help="the synergy row's b (default: the plan's 6; set #2's reward prior "
-                           "gives each task about a quarter of its six directions)")
+                           "gives each task one or two of its six directions)")
   parser.add_argument("--steps", type=int, help="train steps (default: the plan's 1,200)")
   parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("runs/task-alone"))
   args = parser.parse_args(argv)

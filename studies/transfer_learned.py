@@ -54,17 +54,23 @@ def row_config(row: str, seed: int, source: pathlib.Path | None):
   return commands.train_config(args)
 
 
+def beside(out: pathlib.Path, source: pathlib.Path) -> pathlib.Path:
+  """The source run's record copied into OUT (once), where a run's config names its decoder
+  by that sibling folder, and kept records with it, not by a path of the machine."""
+  sibling = out / source.name
+  if not sibling.is_dir():
+    shutil.copytree(source, sibling, ignore=shutil.ignore_patterns("checkpoints", "final", "tb"))
+  return sibling
+
+
 def train_row(out: pathlib.Path, row: str, seed: int, source: pathlib.Path | None,
               log=print) -> pathlib.Path:
   """Train (or keep, or resume) ROWS[row] for `seed` as the step <row>-seed<n> of OUT."""
   from discosyn_jax.experiments import report_runs
   from studies.residual_transfer import train_row as train_step
 
-  if source is not None:  # its source beside it, where the config will look for it
-    sibling = out / source.name
-    if not sibling.is_dir():
-      shutil.copytree(source, sibling, ignore=shutil.ignore_patterns("checkpoints", "final", "tb"))
-    source = sibling
+  if source is not None:
+    source = beside(out, source)
   config = row_config(row, seed, source)
   name = f"{row}-{source.name}" if row in FROM else f"{row}-seed{seed}"
   sparse = row == "sparse-from"  # named as the paper's rows of these tasks are
