@@ -106,7 +106,7 @@ TRAIN_FLAGS = {
     "discriminator_target": "discriminator_target", "task_posture": "task_posture",
     "residual": "residual", "residual_ramp": "residual_ramp", "residual_start": "residual_start",
     "closing_episodes": "closing_episodes", "z_std_floor": "z_std_floor",
-    "task_noise": "task_noise", "bonus_cap": "bonus_cap",
+    "task_noise": "task_noise", "bonus_cap": "bonus_cap", "own_synergies": "own_synergies",
 }
 
 

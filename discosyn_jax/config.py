@@ -47,7 +47,7 @@ ADDED = {"squash_z": False, "physics": "reference", "reset_pool": False, "decode
          "decoder_init": "random", "discriminator_target": "z", "task_posture": False,
          "residual": 0.0, "residual_ramp": 0.0, "residual_start": 0.0,
          "init_residual_std": 0.05, "closing_episodes": 0, "z_std_floor": 0.0,
-         "task_noise": False, "bonus_cap": False}
+         "task_noise": False, "bonus_cap": False, "own_synergies": 0}
 # Fields renamed since a release, read by what they became: the residual's schedule was in
 # train steps until 2026-12-05 and is a share of the run's `steps` since (the same run)
 RENAMED = {"residual_ramp_steps": "residual_ramp", "residual_start_steps": "residual_start"}
@@ -65,6 +65,11 @@ class TrainConfig:
   hand: str = "shadow20"
   # synergy count b, the size of z (1-20); the action size for the identity decoder
   n_synergies: int = 3
+  # each task's own synergies beside the shared ones (0: none): task n's head also picks k
+  # activations of k directions that only task n acts through, a = D(z) + W_n z_own, started
+  # from what task n's own reward prior holds outside the shared start (priors.own); a task
+  # acts in b + k dimensions. The task's own, so they learn beside a frozen decoder too
+  own_synergies: int = 0
   decoder: str = "linear"  # linear (a b x 20 matrix) | mlp | identity (full-action PPO)
   decoder_bias: bool = True  # linear decoder: a = W z + c rather than W z
   freeze_decoder: bool = False  # decoder parameters outside the optimiser
@@ -219,6 +224,13 @@ class TrainConfig:
                          "noise: set alpha2 = alpha3 = 0")
     elif not 1 <= self.n_synergies <= 20:
       raise ValueError(f"the synergy count must be between 1 and 20, not {self.n_synergies}")
+    if self.own_synergies:
+      if self.decoder == "identity":
+        raise ValueError("the identity decoder (full-action PPO) has no room for a task's own "
+                         "synergies: its heads choose every action; set own_synergies = 0")
+      if not 1 <= self.n_synergies + self.own_synergies <= 20:
+        raise ValueError(f"shared plus own synergies must be at most 20, not "
+                         f"{self.n_synergies} + {self.own_synergies}")
     if self.task_posture and self.decoder == "identity":
       raise ValueError("the identity decoder (full-action PPO) has no room for a task posture: "
                        "its heads choose every action; set task_posture = false")
@@ -254,7 +266,7 @@ class TrainConfig:
         raise ValueError(f"{name} must be at least 1, not {getattr(self, name)}")
     if self.steps > MAX_STEPS:
       raise ValueError(f"steps must be at most {MAX_STEPS}, not {self.steps}")
-    for name in ("eval_every", "checkpoint_every", "alpha1", "alpha2", "alpha3", "value_coef",
+    for name in ("own_synergies", "eval_every", "checkpoint_every", "alpha1", "alpha2", "alpha3", "value_coef",
                  "decoder_weight_decay", "decoder_weight_decay_steps", "residual_ramp",
                  "residual_start", "closing_episodes", "z_std_floor"):
       if getattr(self, name) < 0:

@@ -11,7 +11,7 @@ import pytest
 from discosyn import cli
 from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
-from discosyn_jax.experiments import confirm, paper, presets, report, report_runs
+from discosyn_jax.experiments import confirm, intervals, paper, presets, report, report_runs
 from discosyn_jax.experiments.method import Method
 from discosyn_jax.run import folder, layout
 from discosyn_jax.training import loop
@@ -245,6 +245,80 @@ def test_interleaved_rows_are_not_separated():
   assert confirm.judge(p, 0.1) == "not separated"
   assert confirm.judge(intervals.Estimate(0.5, 0.45, 0.58), 0.1) == "level"
   assert confirm.judge(intervals.Estimate(0.5, 0.35, 0.58), 0.1) == "not separated"
+
+
+def test_the_mean_difference_on_planted_numbers_has_the_known_answer(tmp_path):
+  """x 0.8 and y 0.7 on every run of valve0 and both 1.0 on valve1-3: P over the four tasks
+  is diluted to 0.625 by the ties; the difference over them is 0.025 exactly and above 0;
+  restricted to valve0, P = 1 and the difference 0.1."""
+  tasks_ = [f"valve{i}" for i in range(4)]
+  make = lambda v: [[{"valve0": v, **{t: 1.0 for t in tasks_[1:]}}] * 3 for _ in range(5)]
+  rows = [{"name": name, "seeds": list(range(5)),
+           "config": confirm.row_fields(TrainConfig(tasks=tuple(tasks_)))} for name in ("late", "default")]
+  runs = planted_runs(tmp_path, make(0.8), make(0.7))
+  h = lambda **kw: {"x": "late", "y": "default", "score": "curve", "expect": "above", **kw}
+  plan = confirm.parse(tiny_plan(rows=rows, hypotheses=[
+      h(), h(statistic="difference"), h(statistic="difference", task="valve0"),
+      h(task="valve0"), h(statistic="difference", expect="level")]))
+  found = confirm.verdicts(plan, runs)
+  assert found[0].p.value == pytest.approx(0.625)
+  assert (found[1].p.value, found[1].p.low, found[1].p.high) == pytest.approx((0.025,) * 3)
+  assert found[1].verdict == "above" and found[1].holds
+  assert found[2].p.value == pytest.approx(0.1) and found[2].verdict == "above"
+  assert found[3].p.value == pytest.approx(1.0)
+  assert found[4].holds is False  # above, not level
+  # level: a difference inside 0 +- level_margin / 2
+  assert confirm.judge(intervals.Estimate(0.01, -0.03, 0.04), 0.1, "difference") == "level"
+  assert confirm.judge(intervals.Estimate(0.01, -0.06, 0.04), 0.1, "difference") == "not separated"
+  assert confirm.judge(intervals.Estimate(-0.1, -0.16, -0.04), 0.1, "difference") == "below"
+  lines = "\n".join(confirm.report_lines(plan, runs))
+  assert "late vs default (valve0, curve, difference) | 5, 5 | +0.100 [+0.100, +0.100] | above" in lines
+  with pytest.raises(ValueError, match="task 'dice' is not one both rows train"):
+    confirm.parse(tiny_plan(rows=rows, hypotheses=[h(task="dice")]))
+  with pytest.raises(ValueError, match="statistic is one of P, difference"):
+    confirm.parse(tiny_plan(rows=rows, hypotheses=[h(statistic="median")]))
+
+
+def test_the_seeds_a_plan_needs_come_from_the_spread_and_the_effect():
+  # sd 0.05 each, an effect of 0.05, as many runs each: sqrt(n / 2) >= 1.96 + 0.84 -> n = 16
+  assert intervals.seeds_for(0.05, 0.05, 0.05) == 16
+  # 13 runs of y already there: the least n that clears it
+  n = intervals.seeds_for(0.05, 0.05, 0.06, runs_y=13)
+  se = lambda n: (0.05 ** 2 / n + 0.05 ** 2 / 13) ** 0.5
+  assert 0.06 / se(n) >= 2.8016 > 0.06 / se(n - 1)
+  with pytest.raises(ValueError, match="no run count"):
+    intervals.seeds_for(0.05, 0.05, 0.01, runs_y=2)
+
+
+def test_a_row_of_committed_records_is_read_not_run_and_its_configs_checked(tmp_path, capsys):
+  plan_dir, records = tmp_path / "plans" / "mine", tmp_path / "older"
+  base = TrainConfig(tasks=("valve0", "valve1"), steps=3)
+  for seed in (0, 1):
+    fake_run(records / f"ppo-seed{seed}", base.replace(seed=seed), [{"valve0": 0.5, "valve1": 0.5}] * 3)
+  plan = tiny_plan(rows=[
+      {"name": "new", "seeds": [5], "config": confirm.row_fields(base.replace(n_synergies=4))},
+      {"name": "old", "seeds": [0, 1], "config": confirm.row_fields(base),
+       "records": ["../../older/ppo-seed0", "../../older/ppo-seed1"]}],
+      hypotheses=[{"x": "new", "y": "old", "score": "final", "expect": "not below"}])
+  plan_dir.mkdir(parents=True)
+  (plan_dir / "plan.json").write_text(json.dumps(plan))
+  loaded = confirm.load(plan_dir / "plan.json")
+  assert [s.name for s in confirm.steps(loaded, tmp_path / "out")] == ["new-seed5"]
+  assert [p.resolve() for p in confirm.record_paths(loaded)] == [
+      (records / f"ppo-seed{s}").resolve() for s in (0, 1)]
+  runs = [report_runs.load_run(p) for p in confirm.record_paths(loaded)]
+  (found,) = confirm.verdicts(loaded, runs)
+  assert found.runs == (0, 2)
+  # a record that is not the row's run, or that is missing, refuses the plan by name
+  fake_run(records / "other-seed1", base.replace(seed=1, learning_rate=1e-3), [{"valve0": 0.5}] * 3)
+  for wrong, message in (("../../older/other-seed1", "its learning_rate is 0.001, the row's 0.0003"),
+                         ("../../older/none", "no record of seed 1")):
+    plan["rows"][1]["records"][1] = wrong
+    (plan_dir / "plan.json").write_text(json.dumps(plan))
+    with pytest.raises(ValueError, match=message):
+      confirm.load(plan_dir / "plan.json")
+  with pytest.raises(ValueError, match="records must be one folder per seed"):
+    confirm.parse({**plan, "rows": [{**plan["rows"][1], "records": ["a"]}]})
 
 
 # -- the residual's schedule, a share of the run ----------------------------------------------

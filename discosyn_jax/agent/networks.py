@@ -7,6 +7,10 @@ the discriminator.
                                              its mean D(z) is the action at evaluation; with
                                              `task_noise` sigma_phi is each task's own
   q(z | a)     = N(m(a), sigma_psi)          the discriminator
+  a = D(z) + W_n z_own                       with `own_synergies` k: head n picks b + k
+                                             activations, the last k through task n's own
+                                             directions W_n (20 x k), which no other task
+                                             acts through; q reads back all b + k
   pi(r | s, n) = N(tanh(m_n(s)), sigma_r)    with `residual` on: a full-action residual per
                                              task, added to the action with a scheduled
                                              weight (residual.py says what it does to Eq. 2)
@@ -98,6 +102,7 @@ class DiscoSyn(nn.Module):
   task_posture: bool = False  # a learned posture per task, added to the decoder's mean
   residual: bool = False  # a full-action residual head per task (residual.py)
   task_noise: bool = False  # each task's own std of p(a | z) around the shared mean
+  own_synergies: int = 0  # k directions of each task's own beside the shared b
   policy_hidden: tuple[int, ...] = (128, 128)
   value_hidden: tuple[int, ...] = (128, 128)
   decoder_hidden: tuple[int, ...] = (128, 128)
@@ -107,7 +112,7 @@ class DiscoSyn(nn.Module):
   init_residual_std: float = 0.05
 
   def setup(self):
-    b = self.n_synergies
+    b = self.z_size
     self.heads = [GaussianHead(self.policy_hidden, b, self.init_z_std)
                   for _ in self.obs_sizes]
     self.values = [MLP(self.value_hidden, 1) for _ in self.obs_sizes]
@@ -130,9 +135,20 @@ class DiscoSyn(nn.Module):
       self.task_log_stds = self.param(
           "task_log_stds", nn.initializers.constant(math.log(self.init_action_std)),
           (len(self.obs_sizes), self.action_size))
+    if self.own_synergies:
+      # task n's own directions, (k, actions) each, scaled as a linear decoder's columns
+      # start (lecun normal); a run replaces them with its start (synergies/start.py)
+      self.own_directions = self.param(
+          "own_synergies", nn.initializers.lecun_normal(in_axis=-2, out_axis=-1, batch_axis=(0,)),
+          (len(self.obs_sizes), self.own_synergies, self.action_size))
     if self.residual:  # beside the z heads, not sharing their layers: z's are as without it
       self.residuals = [GaussianHead(self.policy_hidden, self.action_size, self.init_residual_std)
                         for _ in self.obs_sizes]
+
+  @property
+  def z_size(self) -> int:
+    """What a head picks: the b shared activations, then the task's own k."""
+    return self.n_synergies + self.own_synergies
 
   @property
   def has_discriminator(self) -> bool:
@@ -152,17 +168,24 @@ class DiscoSyn(nn.Module):
     return self.values[task](obs)[..., 0]
 
   def decode(self, z):
-    """(mean, log_std) of p(a | z); log_std is None for a noiseless decoder (identity, or
-    `decoder_noise` off)."""
+    """(mean, log_std) of p(a | z) for the shared part of z (its first b); log_std is None
+    for a noiseless decoder (identity, or `decoder_noise` off)."""
     if self.decoder == "identity":
       return z, None
-    mean, log_std = self.synergy_decoder(self.activation(z))
+    mean, log_std = self.synergy_decoder(self.activation(z[..., :self.n_synergies]))
     return mean, log_std if self.decoder_noise else None
 
+  def own_part(self, task: int, z):
+    """What task's own synergies add to the action: W_n read at z's last k activations."""
+    return self.activation(z[..., self.n_synergies:]) @ self.own_directions[task]
+
   def act(self, task: int, z):
-    """(mean, log_std) of task's action given z: the decoder's, moved by the task's posture,
-    with the task's own noise where each has its own."""
+    """(mean, log_std) of task's action given z: the decoder's, plus the task's own
+    synergies' part, moved by the task's posture, with the task's own noise where each has
+    its own."""
     mean, log_std = self.decode(z)
+    if self.own_synergies:
+      mean = mean + self.own_part(task, z)
     if self.task_noise and log_std is not None:
       log_std = jnp.broadcast_to(self.task_log_stds[task], mean.shape)
     return (mean + self.postures[task] if self.task_posture else mean), log_std
@@ -201,7 +224,7 @@ def build(config, obs_sizes: Sequence[int], action_size: int) -> DiscoSyn:
       decoder=config.decoder, decoder_bias=config.decoder_bias, decoder_noise=config.decoder_noise,
       squash_z=config.squash_z, discriminator_target=config.discriminator_target,
       task_posture=config.task_posture, residual=bool(config.residual),
-      task_noise=config.task_noise,
+      task_noise=config.task_noise, own_synergies=config.own_synergies,
       policy_hidden=tuple(config.policy_hidden), value_hidden=tuple(config.value_hidden),
       decoder_hidden=tuple(config.decoder_hidden),
       discriminator_hidden=tuple(config.discriminator_hidden),
@@ -212,8 +235,9 @@ def build(config, obs_sizes: Sequence[int], action_size: int) -> DiscoSyn:
 # Top-level parameter collections by role: the optimiser labels them (ppo.optimizer), the
 # gradient norms are logged per role (trainer.py).
 def role(name: str) -> str:
-  # a posture, a residual head and a task's own noise are their task's
-  if name.startswith(("heads_", "residuals_")) or name in ("postures", "task_log_stds"):
+  # a posture, a residual head, a task's own noise and own synergies are their task's
+  if name.startswith(("heads_", "residuals_")) or name in ("postures", "task_log_stds",
+                                                            "own_synergies"):
     return "heads"
   if name.startswith("values_"):
     return "values"

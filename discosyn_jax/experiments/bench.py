@@ -140,7 +140,7 @@ def update_runner(trainer: Trainer, state):
   n = trainer.config.num_envs * trainer.config.unroll_length
   keys = iter(jax.random.split(jax.random.PRNGKey(0), 6 * len(trainer.obs_sizes)))
   normal = lambda *shape: jax.random.normal(next(keys), (n, *shape))
-  samples = [ppo.Samples(obs=normal(size), z=normal(trainer.model.n_synergies),
+  samples = [ppo.Samples(obs=normal(size), z=normal(trainer.model.z_size),
                          action=normal(trainer.action_size), log_prob=normal(),
                          advantage=normal(), target=normal())
              for size in trainer.obs_sizes]

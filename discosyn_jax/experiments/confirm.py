@@ -12,18 +12,30 @@ A plan is a JSON file:
    "rows": [{"name": "set2-late",      a row: its runs are folders <name>-seed<n> in DIR
              "seeds": [3, 4, 5, 6, 7],
              "config": {...}},         every TrainConfig field but the seed (config.json's)
+            {"name": "set2-ppo", "seeds": [0, 1], "config": {...},
+             "records": ["../paper/ppo-set2-seed0", ...]},
+                                       a row of committed records, one per seed, relative
+                                       to the plan file's folder: not run again, each
+                                       checked to be the run of the row's config and seed
             ...],
    "hypotheses": [{"x": "set2-late", "y": "set2-ppo", "score": "final", "expect": "above"},
+                  {"x": ..., "y": ..., "score": "curve", "expect": "not below",
+                   "statistic": "difference", "task": "dice"},
                   ...],
    "decision": "..."}                  what follows if every hypothesis holds, and if not
 
 Scores: "final" (the mean of the last k evaluations), "curve" (the mean over the evaluation
 curve) or "closing" (the closing evaluation, closing.json), a run x task matrix each, over the
-tasks the two rows share. The rule, the same for every plan: P = P(x > y), the probability
-that a run of x scores above a run of y on a task (ties half, averaged over tasks), with its
-95 % stratified bootstrap interval (intervals.py). The verdict is *above* where the interval
-lies above 0.5, *below* where it lies below, *level* where it lies inside 0.5 +- level_margin,
-else *not separated*. An expectation holds: "above" / "below" / "level" on that verdict;
+tasks the two rows share (or the one task a hypothesis names). The statistic: P = P(x > y),
+the probability that a run of x scores above a run of y on a task (ties half, averaged over
+tasks), with its 95 % stratified bootstrap interval (intervals.py); the verdict is *above*
+where the interval lies above 0.5, *below* where it lies below, *level* where it lies inside
+0.5 +- level_margin, else *not separated*. Or ("statistic": "difference") the mean score of
+x minus y's (each the mean over tasks of the mean over runs), its interval the bootstrap's
+with each row's runs resampled on their own: *above* / *below* where the interval clears 0,
+*level* inside 0 +- level_margin / 2 (a difference of success, half P's margin: P moves
+about twice as far as the mean for a shift among a few seeds), else *not separated*: where
+tasks tie at 1.0 (every row solves them) P dilutes a difference and the mean does not. An expectation holds: "above" / "below" / "level" on that verdict;
 "not below" on any verdict but below; "not above" on any but above. The plan holds where
 every hypothesis holds, and only once every run of its rows has finished.
 """
@@ -43,6 +55,7 @@ from discosyn_jax.experiments import intervals
 
 PLAN_FILE = "plan.json"  # the plan, copied into the folder of its runs
 SCORES = ("final", "curve", "closing")
+STATISTICS = ("P", "difference")
 EXPECTATIONS = {"above": {"above"}, "below": {"below"}, "level": {"level"},
                 "not below": {"above", "level", "not separated"},
                 "not above": {"below", "level", "not separated"}}
@@ -53,6 +66,9 @@ class Row:
   name: str
   seeds: tuple[int, ...]
   config: TrainConfig  # its seed that of the first seed; run(seed) gives each
+  # committed records of its runs, one per seed, relative to the plan file's folder: a row
+  # of records is read, not run
+  records: tuple[str, ...] = ()
 
   def run_config(self, seed: int) -> TrainConfig:
     return self.config.replace(seed=seed).validate()
@@ -67,10 +83,14 @@ class Hypothesis:
   y: str
   score: str
   expect: str
+  statistic: str = "P"  # STATISTICS
+  task: str = ""  # one task the rows share; "" for every shared task
 
   @property
   def text(self) -> str:
-    return f"{self.x} {self.expect} {self.y} ({self.score})"
+    what = ", ".join(filter(None, (self.task, self.score,
+                                   "" if self.statistic == "P" else self.statistic)))
+    return f"{self.x} {self.expect} {self.y} ({what})"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -83,9 +103,14 @@ class Plan:
   hypotheses: tuple[Hypothesis, ...]
   decision: str
   source: dict[str, Any]  # the file's JSON, as written
+  base: pathlib.Path | None = None  # the plan file's folder: where its records are found
 
   def row(self, name: str) -> Row:
     return next(row for row in self.rows if row.name == name)
+
+  def record(self, row: Row, seed: int) -> pathlib.Path:
+    """Where the committed record of `row`'s run of `seed` lies."""
+    return (self.base or pathlib.Path(".")) / row.records[row.seeds.index(seed)]
 
 
 def load(path) -> Plan:
@@ -98,10 +123,12 @@ def load(path) -> Plan:
   except (json.JSONDecodeError, UnicodeDecodeError) as err:
     raise ValueError(f"plan {path}: not JSON ({err})") from None
   try:
-    return parse(values)
+    plan = dataclasses.replace(parse(values), base=path.parent)
   except (KeyError, TypeError, ValueError) as err:
     what = f"no {err}" if isinstance(err, KeyError) else str(err)
     raise ValueError(f"plan {path}: {what}") from None
+  check_records(plan)
+  return plan
 
 
 def parse(values: dict[str, Any]) -> Plan:
@@ -124,9 +151,13 @@ def parse(values: dict[str, Any]) -> Plan:
       raise ValueError(f"hypothesis {h.text}: score is one of {', '.join(SCORES)}")
     if h.expect not in EXPECTATIONS:
       raise ValueError(f"hypothesis {h.text}: expect is one of {', '.join(EXPECTATIONS)}")
+    if h.statistic not in STATISTICS:
+      raise ValueError(f"hypothesis {h.text}: statistic is one of {', '.join(STATISTICS)}")
     shared = set(_row_by(rows, h.x).config.tasks) & set(_row_by(rows, h.y).config.tasks)
     if not shared:
       raise ValueError(f"hypothesis {h.text}: the two rows share no task")
+    if h.task and h.task not in shared:
+      raise ValueError(f"hypothesis {h.text}: task {h.task!r} is not one both rows train")
   final_k, margin = values["final_k"], values["level_margin"]
   if not isinstance(final_k, int) or final_k < 1:
     raise ValueError(f"final_k must be a whole number >= 1, not {final_k!r}")
@@ -148,12 +179,34 @@ def _row(values: dict[str, Any]) -> Row:
     raise ValueError(f"row {name}: seeds must be distinct whole numbers")
   if "seed" in fields:
     raise ValueError(f"row {name}: its config gives no seed (the row's seeds do)")
+  records = values.get("records", [])
+  unknown = sorted(set(values) - {"name", "seeds", "config", "records"})
+  if unknown:
+    raise ValueError(f"row {name}: unknown field(s) {', '.join(unknown)}")
+  if records and (len(records) != len(seeds) or not all(isinstance(r, str) and r for r in records)):
+    raise ValueError(f"row {name}: records must be one folder per seed ({len(seeds)})")
   try:
     # a plan written before a field was added ran with that field's value of then
     config = TrainConfig.from_dict(config_lib.with_added({**fields, "seed": seeds[0]})[0]).validate()
   except (TypeError, ValueError) as err:
     raise ValueError(f"row {name}: {err}") from None
-  return Row(name, tuple(seeds), config)
+  return Row(name, tuple(seeds), config, tuple(records))
+
+
+def check_records(plan: Plan) -> None:
+  """Refuse a plan whose named records are missing, or are not the runs of their row's
+  config and seed (a record names the config it ran: config.json)."""
+  for row in plan.rows:
+    for seed in row.seeds if row.records else ():
+      path = plan.record(row, seed)
+      config_file = path / "config.json"
+      if not config_file.is_file():
+        raise ValueError(f"row {row.name}: no record of seed {seed} at {path}")
+      saved, wanted = config_lib.load(config_file), row.run_config(seed)
+      if not config_lib.same_run(saved, wanted):
+        field = next(k for k, v in saved.to_dict().items() if getattr(wanted, k) != v)
+        raise ValueError(f"row {row.name}: {path} is not the run of the row's config: its "
+                         f"{field} is {getattr(saved, field)!r}, the row's {getattr(wanted, field)!r}")
 
 
 def row_fields(config: TrainConfig) -> dict[str, Any]:
@@ -171,7 +224,7 @@ def steps(plan: Plan, out: pathlib.Path) -> list:
   runs = []
   for index in range(max(len(row.seeds) for row in plan.rows)):
     for row in plan.rows:
-      if index < len(row.seeds):
+      if index < len(row.seeds) and not row.records:
         seed = row.seeds[index]
         config = row.run_config(seed)
         meta = dict(experiment=f"confirm-{plan.name}", method=str(report_runs.method_of(config)),
@@ -193,7 +246,7 @@ def check_folder(plan: Plan, out: pathlib.Path) -> None:
     if not same:
       raise ValueError(f"{out} holds the runs of another plan ({held} differs from this one)")
   for row in plan.rows:
-    for seed in row.seeds:
+    for seed in () if row.records else row.seeds:
       config_file = out / row.folder(seed) / "config.json"
       if config_file.is_file():
         saved = config_lib.load(config_file)
@@ -243,10 +296,16 @@ class Verdict:
   holds: bool | None  # None until every planned run has finished
 
 
-def judge(p: intervals.Estimate, margin: float) -> str:
-  """The verdict of the rule (module docstring) on P(x > y) and its interval."""
-  found = intervals.verdict(p)
-  if found == "not separated" and 0.5 - margin <= p.low and p.high <= 0.5 + margin:
+def judge(p: intervals.Estimate, margin: float, statistic: str = "P") -> str:
+  """The verdict of the rule (module docstring) on P(x > y), or on the difference of the
+  means, and its interval."""
+  if statistic == "difference":
+    found = intervals.verdict(p, centre=0.0)
+    margin = margin / 2
+    centre = 0.0
+  else:
+    found, centre = intervals.verdict(p), 0.5
+  if found == "not separated" and centre - margin <= p.low and p.high <= centre + margin:
     return "level"
   return found
 
@@ -269,6 +328,9 @@ def scores(runs, tasks_, score: str, final_k: int) -> np.ndarray | None:
 def verdicts(plan: Plan, runs) -> list[Verdict]:
   """Each hypothesis of `plan` judged on `runs` (report_runs.Run, those of its folder)."""
   def of(row: Row):
+    if row.records:
+      wanted = {plan.record(row, seed).resolve() for seed in row.seeds}
+      return [r for r in runs if r.path.resolve() in wanted and r.finished and r.evaluations]
     names = {row.folder(seed) for seed in row.seeds}
     return [r for r in runs if r.path.name in names and r.finished and r.evaluations]
 
@@ -276,19 +338,20 @@ def verdicts(plan: Plan, runs) -> list[Verdict]:
   out = []
   for h in plan.hypotheses:
     x_row, y_row = plan.row(h.x), plan.row(h.y)
-    shared = [t for t in x_row.config.tasks if t in y_row.config.tasks]
+    shared = [h.task] if h.task else [t for t in x_row.config.tasks if t in y_row.config.tasks]
     x = scores(of(x_row), shared, h.score, plan.final_k)
     y = scores(of(y_row), shared, h.score, plan.final_k)
     counts = (0 if x is None else len(x), 0 if y is None else len(y))
     if x is None or y is None:
       out.append(Verdict(h, None, counts, "no runs yet", None))
       continue
+    statistic = (intervals.mean_difference if h.statistic == "difference" else
+                 intervals.probability_of_improvement)
+    p = statistic({h.score: x}, {h.score: y})[h.score]
     if min(counts) < 2:  # one run a row: a bootstrap of one has no spread to judge by
-      p = intervals.probability_of_improvement({h.score: x}, {h.score: y})[h.score]
       out.append(Verdict(h, p, counts, "too few runs", None))
       continue
-    p = intervals.probability_of_improvement({h.score: x}, {h.score: y})[h.score]
-    found = judge(p, plan.level_margin)
+    found = judge(p, plan.level_margin, h.statistic)
     holds = found in EXPECTATIONS[h.expect] if everything else None
     out.append(Verdict(h, p, counts, found, holds))
   return out
@@ -300,18 +363,25 @@ def report_lines(plan: Plan, runs) -> list[str]:
   found = verdicts(plan, runs)
   planned = sum(len(row.seeds) for row in plan.rows)
   finished = sum(1 for row in plan.rows for seed in row.seeds
-                 if any(r.path.name == row.folder(seed) and r.finished for r in runs))
+                 if any(r.finished and (r.path.resolve() == plan.record(row, seed).resolve()
+                                        if row.records else r.path.name == row.folder(seed))
+                        for r in runs))
   lines = [f"## Confirmation: {plan.name}", "", plan.claim, "",
            f"{finished} of {planned} planned runs finished. Final success: the mean of the last "
            f"{plan.final_k} evaluations. P = P(x > y) with its 95 % stratified bootstrap "
            f"interval; *above* / *below*: the interval clears 0.5; *level*: it lies inside "
-           f"0.5 ± {plan.level_margin:g}; else *not separated*.", "",
-           "| hypothesis | runs (x, y) | P(x > y) | verdict | expected | holds |",
+           f"0.5 ± {plan.level_margin:g}; else *not separated*. A *difference*: x's mean "
+           f"minus y's, its interval the bootstrap's, judged against 0 with *level* inside "
+           f"0 ± {plan.level_margin / 2:g}.", "",
+           "| hypothesis | runs (x, y) | P(x > y) or difference | verdict | expected | holds |",
            "|---|---|---|---|---|---|"]
   for v in found:
-    p = "–" if v.p is None else f"{v.p.value:.2f} [{v.p.low:.2f}, {v.p.high:.2f}]"
+    p = "–" if v.p is None else f"{v.p.value:+.3f} [{v.p.low:+.3f}, {v.p.high:+.3f}]" if (
+        v.hypothesis.statistic == "difference") else f"{v.p.value:.2f} [{v.p.low:.2f}, {v.p.high:.2f}]"
     holds = "pending" if v.holds is None else "yes" if v.holds else "no"
-    lines.append(f"| {v.hypothesis.x} vs {v.hypothesis.y} ({v.hypothesis.score}) | "
+    what = ", ".join(filter(None, (v.hypothesis.task, v.hypothesis.score,
+                                   "" if v.hypothesis.statistic == "P" else "difference")))
+    lines.append(f"| {v.hypothesis.x} vs {v.hypothesis.y} ({what}) | "
                  f"{v.runs[0]}, {v.runs[1]} | {p} | {v.verdict} | {v.hypothesis.expect} | {holds} |")
   if finished < planned:
     outcome = "The plan is pending: not every planned run has finished."
@@ -319,6 +389,11 @@ def report_lines(plan: Plan, runs) -> list[str]:
     outcome = "The plan holds." if all(v.holds for v in found) else "The plan does not hold."
   lines += ["", f"{outcome} Decision rule: {plan.decision}", ""]
   return lines
+
+
+def record_paths(plan: Plan) -> list[pathlib.Path]:
+  """The committed records a plan's rows name (read beside the runs of its folder)."""
+  return [plan.record(row, seed) for row in plan.rows if row.records for seed in row.seeds]
 
 
 def plans_in(paths) -> list[tuple[Plan, pathlib.Path]]:

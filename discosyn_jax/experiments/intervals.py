@@ -148,14 +148,48 @@ def performance_profile(scores: dict[str, np.ndarray], levels,
 
 
 # -- reading P(X > Y) ---------------------------------------------------------------
-def verdict(p: Estimate) -> str:
+def verdict(p: Estimate, centre: float = 0.5) -> str:
   """Where P(default > row) stands: above or below 0.5 when its interval is, else not
-  separated."""
-  if p.low > 0.5:
+  separated (a difference of means: against 0)."""
+  if p.low > centre:
     return "above"
-  if p.high < 0.5:
+  if p.high < centre:
     return "below"
   return "not separated"
+
+
+def difference(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+  """mean(X) - mean(Y): each the mean over tasks of the mean over runs."""
+  return mean(x) - mean(y)
+
+
+def mean_difference(x: dict[str, np.ndarray], y: dict[str, np.ndarray],
+                    reps: int = REPS) -> dict[str, Estimate]:
+  """Per score, the mean of X's runs x tasks matrix minus Y's, with its interval (each
+  method's runs resampled on their own, within each task): where tasks that both solve tie,
+  a difference the probability of improvement dilutes."""
+  a, b = _stack(x), _stack({name: y[name] for name in x})
+  if a.shape[1:] != b.shape[1:]:
+    raise ValueError(f"the two methods' scores have {a.shape[1]} and {b.shape[1]} tasks")
+  return dict(zip(x, _estimates(*_intervals([a, b], difference, reps))))
+
+
+def seeds_for(spread_x: float, spread_y: float, effect: float, runs_y: int | None = None,
+              power: float = 0.8) -> int:
+  """The runs of X needed for the 95 % interval of mean(X) - mean(Y) to clear 0 with
+  probability `power` where the true difference is `effect`, the runs' scores spreading
+  by these standard deviations (normal approximation): the least n with
+  effect / sqrt(sx^2 / n + sy^2 / m) >= 1.96 + z(power); `runs_y` m the runs of Y already
+  there (None: as many as X's)."""
+  from statistics import NormalDist
+
+  need = NormalDist().inv_cdf(0.975) + NormalDist().inv_cdf(power)
+  for n in range(2, 1000):
+    m = n if runs_y is None else runs_y
+    if effect / math.sqrt(spread_x ** 2 / n + spread_y ** 2 / m) >= need:
+      return n
+  raise ValueError(f"no run count up to 1000 separates an effect of {effect} with "
+                   f"{runs_y} runs of the other row")
 
 
 def seeds_to_separate(p: Estimate, seeds: int) -> int | None:

@@ -4,7 +4,9 @@ residual, reuse) whose `.name` is the row name the records carry ('PPO', 'PCA4',
 by `Method.parse`; `Method.of(config)` names what a config runs; `rank` is the order of the
 report's rows. The planner builds Methods, the report groups and orders runs by them.
 
-A name, part by part: the family and its number of synergies ('DiscoSyn3'); the decoder
+A name, part by part: the family and its number of synergies ('DiscoSyn3'), with each
+task's own synergies beside the shared ones after a plus ('DiscoSyn6+3': six shared, three
+of each task's own, so a task acts in nine); the decoder
 ('-L' linear, '-NL' mlp; none for PPO and the fitted PCA / AE); '-matched' for the random
 decoder that copies a learned run's update (the parts after it are that run's); the
 decoder's start where not random ('-reward', '-objects'); its weight decay ('-wd8a200':
@@ -59,7 +61,7 @@ class Residual:
 
 _RESIDUAL = re.compile(r"res(?P<cap>\d+(?:\.\d+)?)(?:r(?P<ramp>\d+))?(?:s(?P<start>\d+))?")
 _DECAY = re.compile(r"wd(?P<decay>\d+(?:\.\d+)?)(?:a(?P<steps>\d+))?")
-_NAME = re.compile(r"(?P<family>" + "|".join(FAMILIES) + r")(?P<b>\d*)(?:-(?P<decoder>L|NL))?"
+_NAME = re.compile(r"(?P<family>" + "|".join(FAMILIES) + r")(?P<b>\d*)(?:\+(?P<own>\d+))?(?:-(?P<decoder>L|NL))?"
                    r"(?P<parts>(?:-[^ ]+)?)(?: (?P<reuse>" + "|".join(REUSES) + r")(?P<acting>-\S+)?)?")
 
 
@@ -76,6 +78,7 @@ class Method:
   residual: Residual | None = None
   reuse: str = ""  # this space used on other tasks (REUSES): frozen, or tuned (learned on)
   acting_residual: Residual | None = None  # the residual the reused space acts with there
+  own: int = 0  # each task's own synergies beside the b shared (config own_synergies)
 
   def __post_init__(self):
     if self.family not in FAMILIES:
@@ -86,6 +89,7 @@ class Method:
   @property
   def name(self) -> str:
     name = self.family + (str(self.synergies) if self.synergies else "")
+    name += f"+{self.own}" if self.own else ""
     name += f"-{self.decoder}" if self.decoder else ""
     name += "-matched" if self.control == "matched" else ""
     name += f"-{self.start}" if self.start else ""
@@ -123,6 +127,7 @@ class Method:
       raise ValueError(f"{name!r} is not a method's name (e.g. PPO, PCA4, DiscoSyn3-L-reward, "
                        "Random3-L-zfree, DiscoSyn3-L-reward frozen)")
     fields: dict[str, Any] = dict(family=match["family"], synergies=int(match["b"] or 0),
+                                  own=int(match["own"] or 0),
                                   decoder=match["decoder"] or "", reuse=match["reuse"] or "")
     tag = []
     for part in match["parts"].split("-")[1:]:
@@ -172,7 +177,7 @@ class Method:
     if get("freeze_decoder") and not get("decoder_from"):
       family = "Random" if init == "random" else "Prior"
     decay = 0.0 if get("freeze_decoder") else (get("decoder_weight_decay", 0.0) or 0.0)
-    return cls(family, get("n_synergies"), DECODERS[get("decoder")],
+    return cls(family, get("n_synergies"), DECODERS[get("decoder")], own=get("own_synergies", 0) or 0,
                start="" if init == "random" else init, decay=decay,
                decay_steps=(get("decoder_weight_decay_steps", 0) or 0) if decay else 0,
                tag=tag, residual=Residual.of(source))
@@ -195,7 +200,7 @@ class Method:
       return (1, self.synergies, FAMILIES.index(self.family))
     place = _ROWS.get((self.family, self.decoder, self.control,
                        (self.start, self.decay, self.decay_steps)))
-    return (2, self.synergies, *place) if place else (9, self.name)
+    return (2, self.synergies, *place, self.own) if place else (9, self.name)
 
 
 def _rows() -> dict[tuple, tuple[int, int]]:

@@ -480,6 +480,9 @@ def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = Tr
     raise ValueError(f"the success threshold must be in (0, 1], not {threshold}")
   plans = confirm.plans_in(paths)  # read first: a damaged plan is refused before any work
   runs, fits = find(paths, final_k=final_k)
+  # the committed records a plan names: read for its verdicts, not pooled into the tables
+  plans = [(plan, folder, find(confirm.record_paths(plan), inside=True, final_k=final_k)[0])
+           for plan, folder in plans]
   if not runs and not fits:
     raise ValueError("no runs among the folders given")
   out = pathlib.Path(out)
@@ -521,8 +524,9 @@ def _write(runs, fits, paths, out: pathlib.Path, threshold: float, with_tsne: bo
   if scales:
     lines += [f"Scales: {', '.join(scales)}.", ""]
 
-  for plan, folder in plans:
-    lines += confirm.report_lines(plan, [r for r in runs if r.path.resolve().parent == folder])
+  for plan, folder, records in plans:
+    lines += confirm.report_lines(plan, [r for r in runs if r.path.resolve().parent == folder]
+                                  + records)
   main = [r for r in runs if r.main]
   if main:
     lines += ["## Tasks solved", "", solved_tables(runs, threshold)]

@@ -81,7 +81,8 @@ def jacobians(env, response: str = "objects", act=None) -> np.ndarray:
 
 def _jacobians(env, response: str, act) -> np.ndarray:
   size = env.action_size
-  obj_v = jnp.asarray(_object_dofs(env), jnp.int32)
+  # the reward is read from any env (a planted task's too); object velocities need a scene
+  obj_v = jnp.asarray(_object_dofs(env), jnp.int32) if response == "objects" else None
 
   @jax.jit
   def collect(key):
@@ -155,6 +156,25 @@ def pool(metrics: list[np.ndarray], b: int, pooling: str = "trace") -> np.ndarra
     direction = rest @ vectors[:, -1]
     chosen = np.column_stack([chosen, direction / np.linalg.norm(direction)])
   return chosen
+
+
+def own(metrics: list[np.ndarray], shared: np.ndarray, k: int) -> np.ndarray:
+  """(tasks, actions, k): each task's k orthonormal directions of its own, the top k of
+  what its metric holds outside span(shared) (actions, b), orthogonal to that span."""
+  size = metrics[0].shape[0]
+  # an orthonormal basis of the complement: the metric is read there alone, so that even a
+  # metric with nothing outside the span gives directions outside it
+  u = np.linalg.svd(shared, full_matrices=True)[0] if shared.shape[1] else np.eye(size)
+  rank = int(np.linalg.matrix_rank(shared)) if shared.shape[1] else 0
+  rest = u[:, rank:]
+  if rest.shape[1] < k:
+    raise ValueError(f"{k} own synergies do not fit beside a {rank}-dimensional shared space "
+                     f"in {size} actions")
+  out = []
+  for metric_ in metrics:
+    values, vectors = np.linalg.eigh(rest.T @ metric_ @ rest)
+    out.append(rest @ vectors[:, np.argsort(values)[::-1][:k]])
+  return np.stack(out)
 
 
 def captured(directions: np.ndarray, metric_: np.ndarray) -> float:

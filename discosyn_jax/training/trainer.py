@@ -76,6 +76,9 @@ class Trainer:
     if len(sizes) != 1:
       raise ValueError(f"the tasks' action sizes differ: {sorted(sizes)}")
     self.action_size = sizes.pop()
+    if config.own_synergies and config.n_synergies + config.own_synergies > self.action_size:
+      raise ValueError(f"{config.n_synergies} shared + {config.own_synergies} own synergies are more "
+                       f"than the hand's {self.action_size} actions")
     self.obs_sizes = tuple(env.observation_size for env in self.envs)
     self.model = networks.build(config, self.obs_sizes, self.action_size)
     self.optimizer = ppo.optimizer(config)
@@ -98,19 +101,19 @@ class Trainer:
                             static_argnames=("task", "episodes", "keep_states"))
 
   # -- state -----------------------------------------------------------------
-  def init(self, seed: int | None = None, decoder_params=None) -> TrainState:
+  def init(self, seed: int | None = None, decoder_params=None, own=None) -> TrainState:
     """A fresh state; `decoder_params` replace the initial decoder (a fitted or learned
-    synergy space: the host side loads it, see `synergies.load_decoder`)."""
+    synergy space: the host side loads it, see `synergies.load_decoder`), `own` each task's
+    own synergies, (tasks, k, actions) (synergies/start.py's)."""
     key = jax.random.PRNGKey(self.config.seed if seed is None else seed)
     # one jitted function: MJX run op by op (eagerly) takes minutes per reset
-    state = self._fresh_state(key, decoder_params)
+    state = self._fresh_state(key, decoder_params, own)
     return jax.device_put(state, self.state_shardings(state))
 
-  def initial_params(self, seed: int | None = None, decoder_params=None):
-    """The parameters `init(seed, decoder_params)` starts from, without building envs."""
+  def initial_params(self, seed: int | None = None, decoder_params=None, own=None):
+    """The parameters `init(seed, decoder_params, own)` starts from, without building envs."""
     key = jax.random.PRNGKey(self.config.seed if seed is None else seed)
-    params = self._fresh_params(self._split(key)[1])
-    return params if decoder_params is None else _with_decoder(params, decoder_params)
+    return _with_start(self._fresh_params(self._split(key)[1]), decoder_params, own)
 
   def _split(self, key):
     return networks.split_seed_key(key, len(self.envs))
@@ -118,11 +121,9 @@ class Trainer:
   def _init_params(self, key):
     return self.model.init(key, [jnp.zeros((1, s)) for s in self.obs_sizes])
 
-  def _initial_state(self, key, decoder_params) -> TrainState:
+  def _initial_state(self, key, decoder_params, own) -> TrainState:
     key, init_key, env_keys = self._split(key)
-    params = self._init_params(init_key)
-    if decoder_params is not None:
-      params = _with_decoder(params, decoder_params)
+    params = _with_start(self._init_params(init_key), decoder_params, own)
     envs = tuple(env.reset(jax.random.split(k, self.config.num_envs))
                  for env, k in zip(self.train_envs, env_keys))
     norms = tuple(running_statistics.init_state(jnp.zeros((s,))) for s in self.obs_sizes)
@@ -164,7 +165,7 @@ class Trainer:
     return jnp.float32(self.config.residual) if step is None else residual.rho(self.config, step)
 
   def _noise(self, key, batch: int):
-    return policy.noise(key, batch, self.model.n_synergies, self.action_size, self.model.residual)
+    return policy.noise(key, batch, self.model.z_size, self.action_size, self.model.residual)
 
   def _unroll(self, params, norm, env_state, key, task: int, rho=None):
     """`unroll_length` steps of every env: under shard_map, each device its own envs."""
@@ -379,14 +380,19 @@ def _grad_norms_by_role(grads) -> dict[str, jax.Array]:
   return {f"grad_norm/{part}": optax.tree.norm(subs) for part, subs in parts.items()}
 
 
-def _with_decoder(params, decoder_params):
+def _with_start(params, decoder_params, own):
+  """`params` with the decoder and the tasks' own synergies a run starts from, where given."""
   inner = dict(params["params"])
-  if "synergy_decoder" not in inner:
-    raise ValueError("this model has no synergy decoder to replace (identity decoder)")
-  want = jax.tree.map(jnp.shape, inner["synergy_decoder"])
-  got = jax.tree.map(jnp.shape, decoder_params)
-  if want != got:
-    raise ValueError(f"the given decoder does not fit this model: {got} != {want}")
-  inner["synergy_decoder"] = decoder_params
+  for name, given, what in (("synergy_decoder", decoder_params, "synergy decoder (identity decoder)"),
+                            ("own_synergies", own, "own synergies (own_synergies = 0)")):
+    if given is None:
+      continue
+    if name not in inner:
+      raise ValueError(f"this model has no {what} to replace")
+    want = jax.tree.map(jnp.shape, inner[name])
+    got = jax.tree.map(jnp.shape, given)
+    if want != got:
+      raise ValueError(f"the given {name.replace('_', ' ')} do not fit this model: {got} != {want}")
+    inner[name] = given
   return {**params, "params": inner}
 
