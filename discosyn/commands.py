@@ -210,9 +210,11 @@ def cmd_synergies(args) -> None:
   from discosyn_jax.tasks import assemble
   from discosyn_jax.viz import synergy_pictures
 
-  if args.export:
+  if args.export is not None:
     from discosyn_jax.synergies import artefact
 
+    if not args.export.strip():
+      raise UsageError("--export needs a file name, not an empty one")
     path = pathlib.Path(args.export)
     if path.exists() and not args.force:
       raise UsageError(f"{path} exists; pass --force to replace it")

@@ -15,6 +15,10 @@ it (OUT/<source folder>), so that the kept config names its source by its siblin
                rows' bonus and decoder entropy (alpha2 0.01, alpha3 0.001)
   tuned-tncap  the same with each task's own noise and its bonus capped at what it pays
   scratch      DiscoSyn3-L-reward learned on the pair alone, from the pair's reward prior
+  own          each seed's set #1 default decoder (SOURCES) frozen, each task with 3 synergies
+               of its own beside it (`--own-synergies 3`: the unseen task's own directions,
+               started from its reward prior outside the frozen span)
+  sparse-own   the same on the sparse goal valve (384 k env steps)
   frozen-from  --source FOLDER: that run's decoder frozen on the pair (the transfer row),
                for a source outside SOURCES (e.g. a confirmation's set #1 run)
   sparse-from  --source FOLDER: that run's decoder frozen on the sparse goal valve (the
@@ -39,6 +43,8 @@ ROWS = {
     "tuned": f"{PAIR} --decoder-from {{source}} {LEARNED_ON}",
     "tuned-tncap": f"{PAIR} --decoder-from {{source}} {LEARNED_ON} --task-noise yes --bonus-cap yes",
     "scratch": f"{PAIR} --preset set1-disco3-linear-reward",
+    "own": f"{PAIR} --decoder-from {{source}} --own-synergies 3",
+    "sparse-own": "--tasks valve_goal --decoder-from {source} --own-synergies 3",
     "frozen-from": f"{PAIR} --decoder-from {{source}}",
     "sparse-from": "--tasks valve_goal --decoder-from {source}",
 }
@@ -73,7 +79,7 @@ def train_row(out: pathlib.Path, row: str, seed: int, source: pathlib.Path | Non
     source = beside(out, source)
   config = row_config(row, seed, source)
   name = f"{row}-{source.name}" if row in FROM else f"{row}-seed{seed}"
-  sparse = row == "sparse-from"  # named as the paper's rows of these tasks are
+  sparse = row.startswith("sparse")  # named as the paper's rows of these tasks are
   meta = dict(experiment="sparse" if sparse else "transfer", method=report_runs.method_of(config).name,
               set="sparse" if sparse else "unseen-set1", seed=seed, scale="cpu")
   log(f"[{name}]")
@@ -85,7 +91,8 @@ def source_of(row: str, seed: int, given: pathlib.Path | None) -> pathlib.Path |
   default for the tuned rows, none for scratch."""
   if row in FROM:
     return given
-  return SOURCES / f"discosyn3-l-reward-set1-seed{seed}" if row.startswith("tuned") else None
+  return (SOURCES / f"discosyn3-l-reward-set1-seed{seed}" if row.startswith(("tuned", "own", "sparse-own"))
+          else None)
 
 
 def spans(folders) -> list[str]:

@@ -387,8 +387,24 @@ def report_lines(plan: Plan, runs) -> list[str]:
     outcome = "The plan is pending: not every planned run has finished."
   else:
     outcome = "The plan holds." if all(v.holds for v in found) else "The plan does not hold."
-  lines += ["", f"{outcome} Decision rule: {plan.decision}", ""]
-  return lines
+  lines += ["", f"{outcome} Decision rule: {plan.decision}", "",
+            "| row | seeds | runs | a task acts in | directions in all |", "|---|---|---|---|---|"]
+  for row in plan.rows:
+    acts, total = dimensions(row.config)
+    source = "committed records" if row.records else "run by the plan"
+    lines.append(f"| {row.name} | {', '.join(map(str, row.seeds))} | {source} | {acts} | {total} |")
+  return lines + [""]
+
+
+def dimensions(config: TrainConfig) -> tuple[str, str]:
+  """(the action dimensions a task acts in, the directions there are in all): b + k and
+  b + tasks x k with each task's own synergies; the full action for PPO."""
+  if config.decoder == "identity":
+    return f"{config.n_synergies} (the full action)", str(config.n_synergies)
+  if not config.own_synergies:
+    return str(config.n_synergies), str(config.n_synergies)
+  b, k, n = config.n_synergies, config.own_synergies, len(config.tasks)
+  return f"{b + k} ({b} shared + {k} own)", f"{b + n * k} ({b} + {n} x {k})"
 
 
 def record_paths(plan: Plan) -> list[pathlib.Path]:

@@ -21,6 +21,8 @@ import json
 import os
 import pathlib
 import tempfile
+import zipfile
+import zlib
 from typing import Any
 
 import flax.linen as nn
@@ -160,7 +162,11 @@ def _decoder_model(fields: dict[str, Any], params: dict) -> networks.DiscoSyn:
 
 
 def decode(fields: dict[str, Any], params: dict, z: np.ndarray) -> np.ndarray:
-  """The decoder's mean at z, for a decoder described by `fields` (ARCHITECTURE)."""
+  """The decoder's mean at z, for a decoder described by `fields` (ARCHITECTURE); ValueError
+  where z's last axis is not the decoder's b."""
+  b = int(fields["n_synergies"])
+  if np.ndim(z) < 1 or np.shape(z)[-1] != b:
+    raise ValueError(f"z must end in the decoder's {b} synergy activations, not shape {np.shape(z)}")
   model = _decoder_model(fields, params)
   return np.asarray(model.apply({"params": {"synergy_decoder": params}}, jnp.asarray(z),
                                 method=networks.DiscoSyn.decode)[0])
@@ -212,14 +218,24 @@ def resolve(source: str | pathlib.Path) -> pathlib.Path:
 def save(path: pathlib.Path, params: dict, fields: dict[str, Any], **meta) -> pathlib.Path:
   """Write a synergy file (atomically: a crash leaves no half-written file)."""
   path = pathlib.Path(path)
+  if not path.name or path.is_dir():
+    raise ValueError(f"cannot write a synergy file to {str(path) or 'an empty path'}: "
+                     f"{'a folder is there' if path.is_dir() else 'no file name'}")
   path.parent.mkdir(parents=True, exist_ok=True)
   flat = {".".join(str(getattr(k, "key", k)) for k in keys): np.asarray(leaf)
           for keys, leaf in jax.tree_util.tree_flatten_with_path(params)[0]}
   info = {**described(fields), **meta}
   fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz")
-  with os.fdopen(fd, "wb") as f:
-    np.savez(f, meta=np.array(json.dumps(info)), **flat)
-  os.replace(tmp, path)
+  try:
+    with os.fdopen(fd, "wb") as f:
+      np.savez(f, meta=np.array(json.dumps(info)), **flat)
+    umask = os.umask(0)  # read the user's umask (mkstemp's file is 0600 whatever it is)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)
+    os.replace(tmp, path)
+  except BaseException:
+    pathlib.Path(tmp).unlink(missing_ok=True)  # nothing half-written left beside it
+    raise
   return path
 
 
@@ -238,12 +254,18 @@ def read(path: str | pathlib.Path) -> tuple[dict[str, Any], dict]:
       raise ValueError(f"{path} is a full-action run: it has no synergy decoder")
     meta = meta_of(config)
   elif path.is_file():
+    if not zipfile.is_zipfile(path):  # a text file, an image: np.load would talk of pickles
+      raise ValueError(f"{path} is not a synergy file: not an .npz archive")
     try:
-      with np.load(path) as data:
+      with np.load(path, allow_pickle=False) as data:
         meta = json.loads(str(data["meta"]))
         flat = {k: data[k] for k in data.files if k != "meta"}
-    except (OSError, ValueError, KeyError, EOFError) as err:
-      raise ValueError(f"{path} is not a synergy file ({type(err).__name__}: {err})") from None
+    except KeyError:
+      raise ValueError(f"{path} is not a synergy file: it holds no meta") from None
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error) as err:
+      # a truncated archive, a member whose CRC fails, meta that is not JSON
+      raise ValueError(f"{path} is not a synergy file: damaged or unreadable "
+                       f"({type(err).__name__}: {err})") from None
     _check_file(path, meta, flat)
   else:
     names = ", ".join(sorted(p.stem for p in SHIPPED.glob("*.npz")))
@@ -288,6 +310,12 @@ def _check_file(path, meta, flat: dict) -> None:
       raise ValueError(f"{path} does not hold the {config.decoder} decoder its meta describes: "
                        f"{name} is {have.get(name, 'absent')} there, {want.get(name, 'absent')} "
                        f"for that decoder")
+  for name, value in sorted(flat.items()):
+    if not np.issubdtype(np.asarray(value).dtype, np.number):
+      raise ValueError(f"{path} is not a synergy file: {name} holds {np.asarray(value).dtype}, "
+                       "not numbers")
+    if not np.isfinite(value).all():
+      raise ValueError(f"{path} is not a synergy file: {name} holds NaN or infinite values")
 
 
 def load_decoder(path, config) -> dict:
@@ -298,7 +326,12 @@ def load_decoder(path, config) -> dict:
   if hand:
     from discosyn_jax.env import hands
 
-    if tuple(hand["actuators"]) != tuple(hands.actuators(config.hand)):
+    wanted = tuple(hands.actuators(config.hand))
+    if tuple(hand["actuators"]) != wanted and sorted(hand["actuators"]) == sorted(wanted):
+      raise ValueError(f"{path} drives the {hand['name']} hand's actuators in another order than "
+                       f"{hands.label(config.hand)}'s action order: its decoder's rows would "
+                       "move the wrong joints")
+    if tuple(hand["actuators"]) != wanted:
       raise ValueError(f"{path} drives the {hand['name']} hand ({len(hand['actuators'])} "
                        f"actuators), not {hands.label(config.hand)} "
                        f"({len(hands.actuators(config.hand))} actuators)")
