@@ -460,14 +460,26 @@ def interval_section(runs: list[Run], task_set: str, out: pathlib.Path) -> list[
   return lines
 
 
-def improvement_of(runs: list[Run], task_set: str, x: str, y: str,
+def improvement_of(runs: list[Run], task_set: str, x: str | Method, y: str | Method,
                    task_names=None) -> dict[str, intervals.Estimate]:
-  """P(x > y) per score for any two rows of a set, over its tasks or `task_names` alone:
-  the comparisons the tables do not hold (two controls, one task, ...)."""
+  """P(x > y) per score for any two rows of a set (a row by its name or its Method), over
+  its tasks or `task_names` alone: the comparisons the tables do not hold (two controls, one
+  task, ...). ValueError naming the rows the set has where one is not there."""
   in_set = [r for r in runs if r.task_set == task_set]
+  if not in_set:
+    sets = ", ".join(sorted({r.task_set for r in runs})) or "none"
+    raise ValueError(f"no runs of set {task_set!r} (sets: {sets})")
   task_names = task_names or list(dict.fromkeys(t for r in in_set for t in r.config.tasks))
   matrices = score_matrices(in_set, task_names)
-  of = lambda method: {kind: matrices[kind][method] for kind in SCORES}
+  rows = {str(m): m for m in matrices["final"]}
+
+  def of(row):
+    method = row if isinstance(row, Method) else rows.get(str(row))
+    if method not in matrices["final"]:
+      raise ValueError(f"no row {str(row)!r} on {task_set} with runs on {', '.join(task_names)}; "
+                       f"rows: {', '.join(rows)}")
+    return {kind: matrices[kind][method] for kind in SCORES}
+
   return intervals.probability_of_improvement(of(x), of(y))
 
 
