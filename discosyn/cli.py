@@ -142,7 +142,8 @@ def build_parser() -> argparse.ArgumentParser:
                  "<row>-seed<n> in --out, and `discosyn report` prints its verdicts (default: none; "
                  "the other experiments take none)")
   p.add_argument("--scale", default="cpu", help="ci (seconds per run) | cpu (minutes per run on "
-                 "2 cores) | gpu (one accelerator); default: %(default)s")
+                 "2 cores) | long (cpu's runs 8x as long: the budget a row needs) | gpu (one "
+                 "accelerator); default: %(default)s")
   p.add_argument("--seeds", type=int, nargs="+",
                  help="training seeds: every step runs once per seed (default: the scale's, "
                  "0 1 2 for cpu and gpu, 0 for ci)")

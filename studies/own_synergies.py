@@ -17,6 +17,10 @@
 
   python -m studies.own_synergies planted [--seeds 0 1] [--variants ...] [--out DIR]
   python -m studies.own_synergies set2 --seeds 3 [--own 3] [--out DIR]
+  python -m studies.own_synergies plan --seeds 16 17 ... [--own 3] --claim TEXT --out PLAN
+           the confirmation plan (experiments/confirm.py): the own row on new seeds, set #2's
+           full-action PPO, default and each-task's-noise rows named by their committed
+           records (COMPARATORS), and the hypotheses of HYPOTHESES
 
 A planted run is 1-2 min on 2 busy cores; a set #2 run 55-70 min two side by side."""
 
@@ -124,6 +128,51 @@ def set2_config(seed: int, own: int, steps: int | None = None):
   return (config if steps is None else config.replace(steps=steps)).validate()
 
 
+# the committed records of set #2's comparator rows, by the confirmation plan's row they are
+# the runs of (a record's config must be that row's at its seed: confirm.check_records)
+COMPARATORS = {
+    "set2-ppo": ["paper/ppo-set2-seed0", "paper/ppo-set2-seed1", "paper/ppo-set2-seed2",
+                 *(f"confirm-late-residual/set2-ppo-seed{s}" for s in range(3, 8)),
+                 *(f"confirm-task-noise-bonus-cap/set2-ppo-seed{s}" for s in range(11, 16))],
+    "set2-default": [*(f"paper/discosyn6-l-reward-set2-seed{s}" for s in range(3)),
+                     *(f"confirm-late-residual/set2-default-seed{s}" for s in range(3, 8)),
+                     *(f"confirm-task-noise-bonus-cap/set2-default-seed{s}" for s in range(11, 16))],
+    "set2-tncap": [*(f"unfound-task/discosyn6-l-reward-tasknoise-bonuscap-set2-seed{s}" for s in (8, 9)),
+                   *(f"confirm-task-noise-bonus-cap/set2-tncap-seed{s}" for s in range(11, 16))],
+}
+ROW = "set2-own"
+# (x, y, score, expect, task): each a difference of means with its bootstrap interval
+HYPOTHESES = [
+    (ROW, "set2-ppo", "curve", "not below", ""),  # the target: not below PPO over the curve
+    (ROW, "set2-ppo", "final", "not below", ""),
+    (ROW, "set2-ppo", "curve", "not below", "dice"),  # the dice over the curve >= PPO's
+    (ROW, "set2-default", "curve", "above", ""),
+    (ROW, "set2-tncap", "curve", "above", "dice"),  # what the own directions add: the dice
+]
+
+
+def plan_source(seeds, own: int, claim: str, decision: str, plan_dir: pathlib.Path) -> dict:
+  """The plan file's JSON: its rows (the own row to run, the comparators by their records,
+  relative to `plan_dir`) and hypotheses."""
+  import os
+
+  from discosyn_jax.experiments import confirm
+
+  base = confirm.load(PLAN)
+  rows = [{"name": ROW, "seeds": list(seeds),
+           "config": confirm.row_fields(set2_config(seeds[0], own))}]
+  for name, records in COMPARATORS.items():
+    paths = [RESULTS / r for r in records]
+    seeds_of = [int(p.name.rsplit("seed", 1)[1]) for p in paths]
+    rows.append({"name": name, "seeds": seeds_of,
+                 "config": confirm.row_fields(base.row(name).config),
+                 "records": [os.path.relpath(p, plan_dir) for p in paths]})
+  hypotheses = [{"x": x, "y": y, "score": score, "expect": expect, "statistic": "difference",
+                 **({"task": task} if task else {})} for x, y, score, expect, task in HYPOTHESES]
+  return {"name": "own-synergies", "claim": claim, "final_k": 3, "level_margin": 0.1,
+          "rows": rows, "hypotheses": hypotheses, "decision": decision}
+
+
 def main(argv=None):
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   sub = parser.add_subparsers(dest="part", required=True)
@@ -138,7 +187,27 @@ def main(argv=None):
   p.add_argument("--seeds", type=int, nargs="+", required=True)
   p.add_argument("--own", type=int, default=3, help="own synergies per task (default: %(default)s)")
   p.add_argument("--steps", type=int, help="train steps (default: the plan row's)")
+  p = sub.add_parser("plan")
+  p.add_argument("--seeds", type=int, nargs="+", required=True)
+  p.add_argument("--own", type=int, default=3)
+  p.add_argument("--claim", required=True)
+  p.add_argument("--decision", required=True)
+  p.add_argument("--out", type=pathlib.Path, required=True, help="the plan file to write")
   args = parser.parse_args(argv)
+
+  if args.part == "plan":
+    import json
+
+    if args.out.exists():
+      parser.error(f"{args.out} exists: a committed plan is never rewritten")
+    source = plan_source(args.seeds, args.own, args.claim, args.decision, args.out.parent)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(source, indent=1) + "\n")
+    from discosyn_jax.experiments import confirm
+
+    confirm.load(args.out)  # its records are the rows' runs, its hypotheses well formed
+    print(args.out)
+    return
 
   if args.part == "planted":
     print(planted_table(train_planted(args), args.outside))

@@ -159,3 +159,26 @@ def test_the_command_line_trains_them_one_flag_away(tmp_path):
 
   arrays = checkpoints.read_arrays(out / "final", "params.params.")
   assert arrays["own_synergies"].shape == (4, 1, 20)
+
+
+def test_the_study_writes_a_plan_whose_comparators_are_the_committed_records(tmp_path):
+  import sys
+
+  from discosyn_jax.experiments import confirm
+  from tests.helpers import ROOT
+
+  sys.path.insert(0, str(ROOT))
+  try:
+    from studies import own_synergies
+  finally:
+    sys.path.remove(str(ROOT))
+  out = tmp_path / "plan" / "plan.json"
+  own_synergies.main(["plan", "--seeds", "16", "17", "--claim", "c", "--decision", "d",
+                      "--out", str(out)])
+  plan = confirm.load(out)  # every named record is its row's run at its seed
+  assert plan.row("set2-own").config.own_synergies == 3
+  assert [len(plan.row(r).records) for r in ("set2-ppo", "set2-default", "set2-tncap")] == [13, 13, 7]
+  assert [s.name for s in confirm.steps(plan, tmp_path)] == ["set2-own-seed16", "set2-own-seed17"]
+  assert all(h.statistic == "difference" for h in plan.hypotheses)
+  with pytest.raises(SystemExit):  # a plan is never rewritten
+    own_synergies.main(["plan", "--seeds", "18", "--claim", "c", "--decision", "d", "--out", str(out)])

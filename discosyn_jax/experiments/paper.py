@@ -115,10 +115,18 @@ SCALES = {
     # side by side (2026-12-03), the sparse valve and transfer ~30 min a seed more.
     # Set #2 trains 4x as long (6.1 M env steps, 36-52 min a run two side by side): full-action
     # PPO needs that for the dice (80 % at 2.8 M / 5.4 M env steps on 2 seeds of 3; at 1x it
-    # stands at 0.50, docs/TRAINING_NOTES.md "A budget for set #2").
+    # stands at 0.50, docs/notes/2026-12-03-a-reward-prior.md "A budget for set #2").
     "cpu": Scale(dict(num_envs=64, unroll_length=20, num_minibatches=4, update_epochs=4,
                       steps=300, eval_every=50, eval_envs=32, checkpoint_every=100), 32, 3000,
                  (0, 1, 2), per_set={"set2": dict(steps=1200, checkpoint_every=200)}),
+    # the `cpu` scale trained 8x as long (12.3 M env steps for set #1, 49 M for set #2), its
+    # evaluations as often: with a constant learning rate and nothing scheduled by the run's
+    # length in these rows, a long run's first 300 train steps are the `cpu` run of the same
+    # seed, and its curve gives the success at every budget up to 8x (32-48 min a set #1 run
+    # two side by side on 2 cores); the budget study of the paper's rows
+    "long": Scale(dict(num_envs=64, unroll_length=20, num_minibatches=4, update_epochs=4,
+                       steps=2400, eval_every=50, eval_envs=32, checkpoint_every=200), 32, 3000,
+                  (0, 1, 2), per_set={"set2": dict(steps=9600, checkpoint_every=400)}),
     # one GPU: 2048 envs per task, 98 M env steps for a four-task run (~26 min on an H200 at
     # its 64k env steps/s, ready in ~3.5 min, 2026-12-04; set #1's default trained to
     # 0.95-1.00 by 18.8 M); episodes restart from a pool of initial states, so the train step
@@ -407,7 +415,7 @@ class Planner:
       return list(steps.values())
     if experiment.startswith("discosyn-") and experiment[9:] in DISCOSYN_SIZES:
       task_set = experiment[9:]
-      # the decayed variant where it is measured to work (docs/TRAINING_NOTES.md)
+      # the decayed variant where it is measured to work (docs/notes/2026-12-02-a-planted-test-bed.md)
       # on the hand's sets both starts of the linear decoder, the paper's and the objects
       # prior's; on the test bed the paper's and the decayed variant (measured to work there)
       kinds = ((("linear", ""), ("mlp", ""), ("linear", presets.DECAYED))
