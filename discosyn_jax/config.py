@@ -87,7 +87,7 @@ class TrainConfig:
   decoder_noise: bool = True
   # the decoder reads tanh(z): synergy activations bounded to [-1, 1], so that the heads
   # cannot make up for any decoder by driving z far out (with z free a random decoder did as
-  # well, docs/TRAINING_NOTES.md); the identity decoder (full-action PPO) reads z as it is
+  # well, docs/notes/2026-11-29-a-decoder-does-not-learn.md); the identity decoder (full-action PPO) reads z as it is
   squash_z: bool = True
   # what the discriminator q(.|a) reads back from the action: z, the head's sample (the
   # paper's), or activation, what the decoder read (tanh z where z is bounded: a z deep in
@@ -104,7 +104,7 @@ class TrainConfig:
   decoder_weight_decay: float = 0.0
   # the decay falls linearly to nothing over this many train steps, then stays off (0:
   # constant): the tie is broken by the decay integrated early, and a decay still on at the
-  # end costs the decoder its reach (docs/TRAINING_NOTES.md); a resumed run keeps its schedule
+  # end costs the decoder its reach (docs/notes/2026-12-02-a-planted-test-bed.md); a resumed run keeps its schedule
   decoder_weight_decay_steps: int = 0
   # -- a residual beside the synergies (discosyn_jax/agent/residual.py) --
   # the cap of the residual's weight rho: each task's head also picks a full-action residual

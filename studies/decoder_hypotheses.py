@@ -7,7 +7,7 @@
 Each run goes to OUT/<variant>-seed<n> (an unfinished one is resumed, a finished one kept);
 the summary gives, per run, env steps, the final deterministic success per valve, and the
 decoder's movement from its initial state (diagnostics.py): relative change of W and the
-principal-angle cosines. Results and commands: docs/TRAINING_NOTES.md.
+principal-angle cosines. Results and commands: docs/notes/2026-11-29-a-decoder-does-not-learn.md.
 """
 
 from __future__ import annotations

@@ -12,7 +12,7 @@ span with the span of PCA-k of those actions (diagnostics.overlap; chance max(p,
 and per task the share of the policy's action variance about the task's mean action that
 the span holds. A space a solving policy works in holds most of it; a row can still solve
 a task in a span of its own, so this reads where the rows' spaces are, not whether they
-work. Results: docs/TRAINING_NOTES.md.
+work. Results: docs/notes/2026-12-04-e-solving-actions.md.
 """
 
 from __future__ import annotations

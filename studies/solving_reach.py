@@ -20,7 +20,7 @@ A decoder that reaches PPO's solving actions at its start gives the heads a spac
 task can be found; one that does not must move there first, paid by a task it has not found.
 One PPO policy's actions are one way to solve the task, not the only one: a far distance
 says the space does not hold PPO's way, not that no way is in it. Results:
-docs/TRAINING_NOTES.md."""
+docs/notes/2026-12-06-d-unpaid-task.md."""
 
 from __future__ import annotations
 

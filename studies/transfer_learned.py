@@ -27,7 +27,7 @@ With --span FOLDER ...: no training; for every linear decoder in the folders (a 
 decoder.npz, or a source record's) the share of each unseen task's one-step reward metric
 (priors.metric, "reward": the directions that change what the task pays in one control
 step) that its span holds (priors.captured; the pair's own reward prior beside them).
-Results: docs/TRAINING_NOTES.md (2026-12-06, evening), docs/results/transfer-learned/."""
+Results: docs/notes/2026-12-06-f-clockwise-valve.md, docs/results/transfer-learned/."""
 
 from __future__ import annotations
 

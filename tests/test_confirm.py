@@ -174,6 +174,15 @@ def test_a_plan_runs_exactly_its_rows_and_refuses_a_run_that_differs(tmp_path, c
      "expect is one of"),
     (dict(extra=1), "unknown field"),
     (dict(decision="missing"), "no 'decision'"),
+    (dict(rows={"late": {}}), "rows must be a non-empty list, not"),
+    (dict(rows=["late"]), r"rows\[0\] must be an object"),
+    (dict(hypotheses=[]), "hypotheses must be a non-empty list"),
+    (dict(hypotheses=["late > default"]), r"hypotheses\[0\] must be an object"),
+    (dict(hypotheses=[{"x": "late", "y": "late", "score": "final", "expect": "above"}]),
+     "compares a row with itself"),
+    (dict(hypotheses=[{"x": "late", "y": 3, "score": "final", "expect": "above"}]),
+     r"hypotheses\[0\]: y must be a string"),
+    (dict(hypotheses=[{"x": "late", "score": "final", "expect": "above"}]), r"hypotheses\[0\]: no y"),
 ])
 def test_a_bad_plan_is_refused_in_one_line_naming_the_file(change, message, tmp_path):
   plan = tiny_plan(**change)
@@ -183,11 +192,62 @@ def test_a_bad_plan_is_refused_in_one_line_naming_the_file(change, message, tmp_
   with pytest.raises(ValueError, match=message) as err:
     confirm.load(tmp_path / "plan.json")
   assert str(err.value).startswith(f"plan {tmp_path / 'plan.json'}: ")
+  for field, value, line in (("seeds", 3, "row late: seeds must be a list of distinct whole numbers, not 3"),
+                             ("seeds", [0, True], "seeds must be a list of distinct whole numbers"),
+                             ("seeds", [0, -1], "row late: seed must be a whole number"),
+                             ("config", None, "row late: config must be an object of TrainConfig fields, not null"),
+                             ("name", "a\x00b", r"rows\[0\]: a row's name is a folder's name"),
+                             ("name", "x" * 101, "at most 100 characters")):
+    bad = tiny_plan()
+    bad["rows"][0][field] = value
+    (tmp_path / "bad.json").write_text(json.dumps(bad))
+    with pytest.raises(ValueError, match=line):
+      confirm.load(tmp_path / "bad.json")
   seeded = tiny_plan()
   seeded["rows"][0]["config"]["seed"] = 3
   (tmp_path / "seeded.json").write_text(json.dumps(seeded))
   with pytest.raises(ValueError, match="row late: its config gives no seed"):
     confirm.load(tmp_path / "seeded.json")
+
+
+def test_a_refused_plan_leaves_nothing_and_the_corrected_one_then_runs(tmp_path, capsys):
+  plan, out = tiny_plan(), tmp_path / "out"
+  tasks_ = plan["rows"][0]["config"]["tasks"]
+  for change, line in ((("tasks", [*tasks_, "no_such_task"]), "row late: unknown task or task set 'no_such_task'"),
+                       (("hand", "nohand"), "row late: a hand is one of"),
+                       (("decoder_from", "missing.npz"), "row late: decoder_from missing.npz does not exist")):
+    bad = json.loads(json.dumps(plan))
+    bad["rows"][0]["config"][change[0]] = change[1]
+    if change[0] == "decoder_from":
+      bad["rows"][0]["config"].update(decoder_init="random", freeze_decoder=True, alpha2=0.0, alpha3=0.0)
+    (tmp_path / "bad.json").write_text(json.dumps(bad))
+    assert cli.main(["experiment", "confirm", str(tmp_path / "bad.json"), "--out", str(out)]) == 2
+    err = [l for l in capsys.readouterr().err.splitlines() if l]
+    assert len(err) == 1 and line in err[0], err
+    assert not out.exists()
+  # a plan.json that is a folder is named, and nothing is left beside it
+  (out / confirm.PLAN_FILE).mkdir(parents=True)
+  (tmp_path / "plan.json").write_text(json.dumps(plan))
+  assert cli.main(["experiment", "confirm", str(tmp_path / "plan.json"), "--out", str(out)]) == 2
+  assert "is not a file" in capsys.readouterr().err
+  assert sorted(p.name for p in out.iterdir()) == [confirm.PLAN_FILE]
+  # another plan's file that is not UTF-8: named as another plan, not as a decoding error
+  (out / confirm.PLAN_FILE).rmdir()
+  (out / confirm.PLAN_FILE).write_bytes(b"\xff\xfe{")
+  with pytest.raises(ValueError, match="holds the runs of another plan"):
+    confirm.check_folder(confirm.load(tmp_path / "plan.json"), out)
+
+
+def test_two_rows_apart_in_a_field_the_name_does_not_carry_are_told_apart(tmp_path):
+  base = TOY.replace(tasks=("valve0", "valve1"))
+  plan = confirm.parse(tiny_plan(
+      rows=[{"name": "slow", "seeds": [0], "config": confirm.row_fields(base)},
+            {"name": "fast", "seeds": [0], "config": confirm.row_fields(base.replace(learning_rate=1e-3))}],
+      hypotheses=[{"x": "fast", "y": "slow", "score": "final", "expect": "not below"}]))
+  methods = [s.meta["method"] for s in confirm.steps(plan, tmp_path)]
+  assert methods == ["DiscoSyn2-L-slow", "DiscoSyn2-L-fast"]
+  for name in methods:
+    assert Method.parse(name).name == name
 
 
 def planted_runs(tmp_path, x_scores, y_scores):

@@ -23,7 +23,7 @@ decoder's noise at the defaults (0.3 x 0.05 against 0.3). The residual thus expl
 the noise the decoder has anyway and costs the start no exploration of its own; its own
 noise only widens the action's by rho^2 sigma_r^2. On a planted task a frozen span cannot
 finish, the draw's form learned nothing in 300 train steps where the marginal's reached a
-return of 9.0-9.5 of 10 (docs/TRAINING_NOTES.md, 2026-12-05). It needs the decoder's noise
+return of 9.0-9.5 of 10 (docs/notes/2026-12-05-c-residual-planted.md). It needs the decoder's noise
 (decoder_noise on); rho = 0 leaves the residual's parameters without a gradient: held at 0
 it does not drift.
 
@@ -35,7 +35,7 @@ What the extended reward (paper, Eq. 2) means with the residual:
   alpha3 H(p(a | z))   the decoder's own noise sigma_phi, as before
   alpha1 H(pi(z|s,n))  z's alone: the residual's entropy is in no bonus. Its noise is meant
                        to stay small (wide full-action noise from the start diluted the
-                       synergies' exploration, docs/TRAINING_NOTES.md); PPO alone sets it
+                       synergies' exploration, docs/notes/2026-12-05-c-residual-planted.md); PPO alone sets it
 With residual = 0 none of this exists: no parameters, no draws, today's computation.
 """
 

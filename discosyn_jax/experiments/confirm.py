@@ -49,7 +49,7 @@ from typing import Any
 
 import numpy as np
 
-from discosyn_jax import atomic, config as config_lib
+from discosyn_jax import atomic, checks, config as config_lib
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.experiments import intervals
 
@@ -138,11 +138,14 @@ def parse(values: dict[str, Any]) -> Plan:
   unknown = sorted(set(values) - known)
   if unknown:
     raise ValueError(f"unknown field(s) {', '.join(unknown)}")
-  rows = tuple(_row(r) for r in values["rows"])
+  for field in ("rows", "hypotheses"):
+    if not isinstance(values[field], list) or not values[field]:
+      raise ValueError(f"{field} must be a non-empty list, not {_shown(values[field])}")
+  rows = tuple(_row(r, i) for i, r in enumerate(values["rows"]))
   names = [r.name for r in rows]
-  if not rows or len(set(names)) != len(names):
+  if len(set(names)) != len(names):
     raise ValueError("rows must be given, each name once")
-  hypotheses = tuple(Hypothesis(**h) for h in values["hypotheses"])
+  hypotheses = tuple(_hypothesis(h, i) for i, h in enumerate(values["hypotheses"]))
   for h in hypotheses:
     for name in (h.x, h.y):
       if name not in names:
@@ -155,9 +158,13 @@ def parse(values: dict[str, Any]) -> Plan:
       raise ValueError(f"hypothesis {h.text}: statistic is one of {', '.join(STATISTICS)}")
     shared = set(_row_by(rows, h.x).config.tasks) & set(_row_by(rows, h.y).config.tasks)
     if not shared:
-      raise ValueError(f"hypothesis {h.text}: the two rows share no task")
+      raise ValueError(f"hypothesis {h.text}: the two rows share no task ({h.x}: "
+                       f"{', '.join(_row_by(rows, h.x).config.tasks)}; {h.y}: "
+                       f"{', '.join(_row_by(rows, h.y).config.tasks)})")
     if h.task and h.task not in shared:
       raise ValueError(f"hypothesis {h.text}: task {h.task!r} is not one both rows train")
+    if h.x == h.y:
+      raise ValueError(f"hypothesis {h.text}: compares a row with itself")
   final_k, margin = values["final_k"], values["level_margin"]
   if not isinstance(final_k, int) or final_k < 1:
     raise ValueError(f"final_k must be a whole number >= 1, not {final_k!r}")
@@ -171,12 +178,49 @@ def _row_by(rows, name: str) -> Row:
   return next(r for r in rows if r.name == name)
 
 
-def _row(values: dict[str, Any]) -> Row:
+def _shown(value) -> str:
+  """A value as a message names it: short, one line."""
+  text = json.dumps(value) if not isinstance(value, str) else repr(value)
+  return text if len(text) <= 40 else text[:37] + "..."
+
+
+MAX_NAME = 100  # a row's name is a folder's name: short, printable
+
+
+def _hypothesis(values, index: int) -> Hypothesis:
+  if not isinstance(values, dict):
+    raise ValueError(f"hypotheses[{index}] must be an object (x, y, score, expect), not "
+                     f"{_shown(values)}")
+  fields = {f.name for f in dataclasses.fields(Hypothesis)}
+  unknown, missing = sorted(set(values) - fields), [k for k in ("x", "y", "score", "expect")
+                                                     if k not in values]
+  if unknown or missing:
+    raise ValueError(f"hypotheses[{index}]: " + (f"unknown field(s) {', '.join(unknown)}" if unknown
+                                                 else f"no {missing[0]}"))
+  bad = [k for k, v in values.items() if not isinstance(v, str)]
+  if bad:
+    raise ValueError(f"hypotheses[{index}]: {bad[0]} must be a string, not {_shown(values[bad[0]])}")
+  return Hypothesis(**values)
+
+
+def _row(values, index: int = 0) -> Row:
+  if not isinstance(values, dict):
+    raise ValueError(f"rows[{index}] must be an object (name, seeds, config), not {_shown(values)}")
   name, seeds, fields = values["name"], values["seeds"], values["config"]
-  if not isinstance(name, str) or not name or "/" in name:
-    raise ValueError(f"a row's name is a folder's name, not {name!r}")
-  if not seeds or not all(isinstance(s, int) for s in seeds) or len(set(seeds)) != len(seeds):
-    raise ValueError(f"row {name}: seeds must be distinct whole numbers")
+  if (not isinstance(name, str) or not name or "/" in name or len(name) > MAX_NAME
+      or not name.isprintable() or name in (".", "..")):
+    raise ValueError(f"rows[{index}]: a row's name is a folder's name (printable, no '/', at most "
+                     f"{MAX_NAME} characters), not {_shown(name)}")
+  if (not isinstance(seeds, list) or not seeds or len(set(map(str, seeds))) != len(seeds)
+      or not all(isinstance(s, int) and not isinstance(s, bool) for s in seeds)):
+    raise ValueError(f"row {name}: seeds must be a list of distinct whole numbers, not {_shown(seeds)}")
+  for seed in seeds:
+    try:
+      checks.seed(seed)
+    except ValueError as err:
+      raise ValueError(f"row {name}: {err}") from None
+  if not isinstance(fields, dict):
+    raise ValueError(f"row {name}: config must be an object of TrainConfig fields, not {_shown(fields)}")
   if "seed" in fields:
     raise ValueError(f"row {name}: its config gives no seed (the row's seeds do)")
   records = values.get("records", [])
@@ -222,12 +266,15 @@ def steps(plan: Plan, out: pathlib.Path) -> list:
 
   out = pathlib.Path(out)
   runs = []
+  methods = [report_runs.method_of(row.config) for row in plan.rows]
   for index in range(max(len(row.seeds) for row in plan.rows)):
-    for row in plan.rows:
+    for row, method in zip(plan.rows, methods):
       if index < len(row.seeds) and not row.records:
         seed = row.seeds[index]
         config = row.run_config(seed)
-        meta = dict(experiment=f"confirm-{plan.name}", method=str(report_runs.method_of(config)),
+        if methods.count(method) > 1:  # rows apart in a field the name does not carry
+          method = method.replace(tag=(*method.tag, row.name))
+        meta = dict(experiment=f"confirm-{plan.name}", method=str(method),
                     set=report_runs.set_of(config), seed=seed, scale=f"plan {plan.name}",
                     row=row.name)
         runs.append(paper.Train(row.folder(seed), config, meta))
@@ -237,11 +284,15 @@ def steps(plan: Plan, out: pathlib.Path) -> list:
 def check_folder(plan: Plan, out: pathlib.Path) -> None:
   """Refuse a folder that holds another plan, or a run whose config is not the plan's."""
   out = pathlib.Path(out)
+  if out.exists() and not out.is_dir():
+    raise ValueError(f"{out} is not a folder: the plan's runs go in a folder")
   held = out / PLAN_FILE
+  if held.exists() and not held.is_file():
+    raise ValueError(f"{held} is not a file: the folder's plan file is in the way")
   if held.is_file():
     try:
       same = json.loads(held.read_text()) == plan.source
-    except json.JSONDecodeError:
+    except (json.JSONDecodeError, UnicodeDecodeError):
       same = False
     if not same:
       raise ValueError(f"{out} holds the runs of another plan ({held} differs from this one)")
@@ -257,6 +308,25 @@ def check_folder(plan: Plan, out: pathlib.Path) -> None:
                            f"{getattr(saved, field)!r}, the plan's {getattr(wanted, field)!r}")
 
 
+def check_runnable(plan: Plan) -> None:
+  """Refuse, before anything is written, a plan whose rows name a task, a hand or a decoder
+  source that is not there."""
+  from discosyn_jax import tasks
+  from discosyn_jax.env import hands
+  from discosyn_jax.synergies import fitting
+
+  for row in plan.rows:
+    if row.records:
+      continue
+    try:
+      tasks.expand(row.config.tasks)
+      hands.load(row.config.hand)
+      if row.config.decoder_from and not fitting.resolve(row.config.decoder_from).exists():
+        raise ValueError(f"decoder_from {row.config.decoder_from} does not exist")
+    except ValueError as err:
+      raise ValueError(f"row {row.name}: {err}") from None
+
+
 def run(plan_path, out, *, progress: bool = False, log=print) -> list[pathlib.Path]:
   """Run (or continue) every run of the plan in `out`; the plan is copied there first. A run
   that another process is writing is passed by, so that the same command started twice
@@ -266,6 +336,7 @@ def run(plan_path, out, *, progress: bool = False, log=print) -> list[pathlib.Pa
   plan = load(plan_path)
   out = pathlib.Path(out)
   check_folder(plan, out)
+  check_runnable(plan)  # everything known good before OUT is made
   out.mkdir(parents=True, exist_ok=True)
   atomic.write_text(out / PLAN_FILE, json.dumps(plan.source, indent=1) + "\n")
   folders = []
@@ -413,10 +484,10 @@ def record_paths(plan: Plan) -> list[pathlib.Path]:
 
 
 def plans_in(paths) -> list[tuple[Plan, pathlib.Path]]:
-  """The plans of the folders given to the report (a folder with plan.json, or inside one)."""
+  """The plans of the folders given to the report: each folder's own plan.json (a folder
+  above a folder given is not read: a run's folder given alone reports that run)."""
   found = []
-  for path in (pathlib.Path(p).resolve() for p in paths):
-    for folder in (path, path.parent):
-      if (folder / PLAN_FILE).is_file() and all(f != folder for _, f in found):
-        found.append((load(folder / PLAN_FILE), folder))
+  for folder in (pathlib.Path(p).resolve() for p in paths):
+    if (folder / PLAN_FILE).is_file() and all(f != folder for _, f in found):
+      found.append((load(folder / PLAN_FILE), folder))
   return found

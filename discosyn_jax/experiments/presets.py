@@ -4,7 +4,7 @@ Each preset is a TrainConfig (discosyn_jax/config.py), so a typo in a field name
 import, not in the middle of a run. The paper's runs (Tables I and II) are here by name,
 `<set>-disco<b>-<linear|mlp>` and `<set>-ppo`; discosyn_jax/experiments/paper.py runs them at a scale.
 The linear DiscoSyn presets start every seed's decoder from the reward prior (one synergy
-space from every seed: set #1 5 seeds, set #2 3 seeds, docs/TRAINING_NOTES.md);
+space from every seed: set #1 5 seeds, set #2 3 seeds, docs/notes/2026-12-03-a-reward-prior.md);
 `<set>-disco<b>-linear-reward`, `-objects` (the objects prior) and `-paper` (the paper's
 random start) name each start on every set.
 """
@@ -21,7 +21,7 @@ CPU_RUN = dict(num_envs=128, unroll_length=20, num_minibatches=8, update_epochs=
 PLANTED_RUN = dict(num_envs=64, unroll_length=20, num_minibatches=4, update_epochs=4, steps=400,
                    eval_every=25, eval_envs=64, checkpoint_every=100)
 # a tie-breaker: a decoder weight decay that falls from 8 to nothing over 200 train
-# steps (the test bed: one span from every seed, docs/TRAINING_NOTES.md); `<preset>-decay`
+# steps (the test bed: one span from every seed, docs/notes/2026-12-02-a-planted-test-bed.md); `<preset>-decay`
 DECAY = dict(decoder_weight_decay=8.0, decoder_weight_decay_steps=200)
 DECAYED = "-decay"
 # where `discosyn experiment discosyn-<set>` runs it beside the paper's update: on the hand
@@ -43,13 +43,13 @@ REWARDED = "-reward"
 # correction, its weight ramped from 0 to a cap of 0.3 over the first half of the run (set #1's
 # `cpu`-scale run: 150 of 300 train steps, set #2's: 600 of 1,200); on the planted test bed
 # with targets partly outside the span it took success from 0.40-0.47 to 0.94-0.96 (2 seeds,
-# docs/TRAINING_NOTES.md); `<preset>-residual`, a row to measure, not the default
+# docs/notes/2026-12-05-c-residual-planted.md); `<preset>-residual`, a row to measure, not the default
 RESIDUAL_CAP = 0.3
 RESIDUAL = dict(residual=RESIDUAL_CAP, residual_ramp=0.5)
 RESIDUAL_SUFFIX = "-residual"
 # the late schedule: the residual held at 0 for the first third of the run, then ramped in
 # over a sixth (set #2's `cpu` scale: 400 and 200 of 1,200 train steps, chosen on seeds 0-1
-# of set #2, docs/TRAINING_NOTES.md); `<preset>-residual-late`, the row the confirmation plans
+# of set #2, docs/notes/2026-12-05-g-residual-more.md); `<preset>-residual-late`, the row the confirmation plans
 # of docs/results/confirm-late-residual/ test on new seeds
 RESIDUAL_LATE = dict(residual=RESIDUAL_CAP, residual_start=1 / 3, residual_ramp=1 / 6)
 LATE_SUFFIX = "-residual-late"
@@ -62,7 +62,7 @@ RANDOM = dict(decoder_init="random")
 PRESETS: dict[str, TrainConfig] = {
     # the README's main job: synergies (one shared linear decoder, b = 3, z bounded) on two
     # valves, 2-3 minutes on 2 idle cores (819 k env steps), long enough to turn them
-    # (docs/TRAINING_NOTES.md, "quickstart": 3 seeds)
+    # (docs/notes/2026-11-29-b-quickstart.md: 3 seeds)
     "quickstart": TrainConfig(tasks=("valve2", "valve3"), n_synergies=3, decoder="linear",
                               squash_z=True, **REWARD, num_envs=128, unroll_length=20, num_minibatches=8,
                               update_epochs=4, steps=160, eval_every=20, eval_envs=32,
@@ -78,7 +78,7 @@ for _set, _sizes in (("set1", (3, 4)), ("set2", (4, 6))):
   for _b in _sizes:
     for _kind in ("linear", "mlp"):
       # z bounded (squash_z): the decoder then has to learn its synergies; with z free a
-      # random decoder did as well (docs/TRAINING_NOTES.md)
+      # random decoder did as well (docs/notes/2026-11-29-a-decoder-does-not-learn.md)
       PRESETS[f"{_set}-disco{_b}-{_kind}"] = TrainConfig(tasks=_tasks, n_synergies=_b,
                                                         decoder=_kind, squash_z=True, **RANDOM,
                                                         **CPU_RUN)

@@ -1,5 +1,5 @@
 """Synergy priors from the physics: the action directions that matter most to the task set,
-the same for every seed (a tie-breaker; docs/TRAINING_NOTES.md has its runs).
+the same for every seed (a tie-breaker; docs/notes/2026-12-02-f-physics-prior.md has its runs).
 
 For each env: states of a uniform random policy (a fixed seed, never the run's; another
 policy's where one is given, for diagnostics: docs/results/policy-states/); at each,
@@ -13,7 +13,7 @@ hand and the physics, never on a training seed, so every seed's decoder starts i
 subspace (`start`: each keeps its own random scale, bias and noise). It is measured on
 MuJoCo C (the reference physics, on the CPU) whatever backend the run trains on
 (`reference`): a CPU and a GPU run of a set start alike, and MJX on a GPU spent 4 minutes
-compiling the measurement (docs/TRAINING_NOTES.md).
+compiling the measurement (docs/notes/2026-12-04-d-gpu-h200.md).
 """
 
 from __future__ import annotations

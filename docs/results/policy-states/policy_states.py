@@ -17,7 +17,7 @@ where only the records are kept). For each seed, three b-direction spaces:
 
 Each is pooled as the reward prior pools ("share"), then compared with PCA4 of the policy's
 actions (overlap, chance max(p, q) / 20) and per task the share of its action variance it
-holds. Output beside this file; docs/TRAINING_NOTES.md reads it.
+holds. Output beside this file; docs/notes/2026-12-04-g-decoder-moves.md reads it.
 """
 
 import argparse

@@ -1,5 +1,5 @@
 """Why is the reward prior frozen weak at b = 4 on set #1 (Prior4-L-reward)? Two variants of
-it, 3 seeds each, beside Table I's rows (docs/TRAINING_NOTES.md, "Why Prior4-L-reward is
+it, 3 seeds each, beside Table I's rows (docs/notes/2026-12-04-a-prior4.md, "Why Prior4-L-reward is
 weak").
 
   python docs/results/prior4-variants/prior4_variants.py gains        # no training

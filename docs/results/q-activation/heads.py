@@ -1,6 +1,6 @@
 """What each task's head does while set #2 trains: the z entropy of pi(z|s,n), the
 discriminator's log q, and the task's reward per step, averaged over the 50 train steps up
-to each of a few steps (docs/TRAINING_NOTES.md, "The discriminator against exploration").
+to each of a few steps (docs/notes/2026-12-04-i-discriminator.md, "The discriminator against exploration").
 
   python docs/results/q-activation/heads.py TASK RUN...     # the table, one row a run
   python docs/results/q-activation/heads.py --thin RUN DEST  # DEST/heads.jsonl.xz

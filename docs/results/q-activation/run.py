@@ -1,6 +1,6 @@
 """A row of Tables I and II with one change: the discriminator reads back the activation the
 decoder read, tanh(z), instead of the head's unbounded z (`discriminator_target:
-activation`; docs/TRAINING_NOTES.md, "The discriminator against exploration"):
+activation`; docs/notes/2026-12-04-i-discriminator.md, "The discriminator against exploration"):
 
   python docs/results/q-activation/run.py ROW SEED OUT [B]   # e.g. ROW discosyn6-l-reward-set2
 

@@ -1,4 +1,4 @@
-"""Two tries at a set-#2 decoder that moves further from its start (docs/TRAINING_NOTES.md,
+"""Two tries at a set-#2 decoder that moves further from its start (docs/notes/2026-12-04-g-decoder-moves.md,
 "Set #2: what the one-step reward cannot see"), each Table II's config of seed S with one
 change, trained from Python:
 

@@ -1,4 +1,4 @@
-"""The record of a task-posture run (docs/TRAINING_NOTES.md, "A posture per task"):
+"""The record of a task-posture run (docs/notes/2026-12-05-a-task-posture.md, "A posture per task"):
 
   python docs/results/task-posture/record.py RUN DEST
 

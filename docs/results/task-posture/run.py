@@ -1,5 +1,5 @@
 """A row of Tables I and II with one change: each task learns its own posture, added to the
-shared decoder's mean (`task_posture: true`; docs/TRAINING_NOTES.md, "A posture per task"):
+shared decoder's mean (`task_posture: true`; docs/notes/2026-12-05-a-task-posture.md, "A posture per task"):
 
   python docs/results/task-posture/run.py ROW SEED OUT   # e.g. ROW discosyn6-l-reward-set2
 
