@@ -213,13 +213,13 @@ def main(argv=None):
     print(planted_table(train_planted(args), args.outside))
     return
   from discosyn_jax.experiments import method as method_lib
-  from discosyn_jax.tasks import assemble
+  from studies.residual_transfer import train_row
 
-  for seed in args.seeds:
+  for seed in args.seeds:  # each a step of `discosyn experiment`: resumed, kept, its record
     config = set2_config(seed, args.own, args.steps)
-    name = method_lib.Method.of(config).name.lower()
-    run_dir = args.out / f"{name}-set2-seed{seed}"
-    assemble.train(config, run_dir, resume=run_dir.exists(), progress=False)
+    method = method_lib.Method.of(config)
+    meta = dict(experiment="own-synergies", method=method.name, set="set2", seed=seed, scale="cpu")
+    train_row(args.out, f"{method.name.lower()}-set2-seed{seed}", config, meta)
 
 
 if __name__ == "__main__":
