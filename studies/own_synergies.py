@@ -18,6 +18,11 @@
   python -m studies.own_synergies planted [--seeds 0 1] [--variants ...] [--out DIR]
   python -m studies.own_synergies set2 --seeds 3 [--own 3] [--out DIR]
   python -m studies.own_synergies plan --seeds 16 17 ... [--own 3] --claim TEXT --out PLAN
+  python -m studies.own_synergies transfer-plan --seeds 16 ... --claim TEXT --out PLAN
+           the plan of transfer with own synergies: the shipped set #1 synergies
+           (shadow20-set1) frozen on the unseen pair and on the sparse goal valve, with and
+           without 3 synergies of each task's own, beside full-action PPO, every row run on
+           the new seeds (TRANSFER_ROWS, TRANSFER_HYPOTHESES)
            the confirmation plan (experiments/confirm.py): the own row on new seeds, set #2's
            full-action PPO, default and each-task's-noise rows named by their committed
            records (COMPARATORS), and the hypotheses of HYPOTHESES
@@ -151,6 +156,49 @@ HYPOTHESES = [
 ]
 
 
+# the transfer plan's rows: `discosyn train` flags at the frozen transfer's size (300 train
+# steps x 64 envs x 20 steps a task); PPO with the paper's transfer rows' settings
+PAIR, GOAL = "--tasks valve_cylinder valve_cw", "--tasks valve_goal"
+TRANSFER_SIZE = "--num-envs 64 --minibatches 4 --steps 300 --eval-every 50 --eval-envs 32"
+FROZEN = "--decoder-from shadow20-set1"
+TRANSFER_ROWS = {
+    "pair-own": f"{PAIR} {FROZEN} --own-synergies 3",
+    "pair-frozen": f"{PAIR} {FROZEN}",
+    "pair-ppo": f"{PAIR} --preset set1-ppo",
+    "goal-own": f"{GOAL} {FROZEN} --own-synergies 3",
+    "goal-frozen": f"{GOAL} {FROZEN}",
+    "goal-ppo": f"{GOAL} --preset set1-ppo",
+}
+TRANSFER_HYPOTHESES = [  # (x, y, score, expect, task), each a difference of means
+    ("pair-own", "pair-ppo", "final", "not below", "valve_cw"),  # the target
+    ("pair-own", "pair-frozen", "curve", "above", "valve_cw"),  # what the own directions add
+    ("pair-own", "pair-ppo", "final", "not below", "valve_cylinder"),  # kept
+    ("goal-own", "goal-ppo", "final", "not below", ""),
+    ("goal-own", "goal-frozen", "final", "above", ""),
+]
+
+
+def transfer_config(row: str, seed: int):
+  """The TrainConfig `discosyn train TRANSFER_ROWS[row] TRANSFER_SIZE --seed SEED` builds."""
+  from discosyn import cli, commands
+
+  args = cli.build_parser().parse_args(
+      ["train", *f"{TRANSFER_ROWS[row]} {TRANSFER_SIZE} --seed {seed}".split()])
+  return commands.train_config(args)
+
+
+def transfer_plan_source(seeds, claim: str, decision: str) -> dict:
+  from discosyn_jax.experiments import confirm
+
+  rows = [{"name": row, "seeds": list(seeds),
+           "config": confirm.row_fields(transfer_config(row, seeds[0]))} for row in TRANSFER_ROWS]
+  hypotheses = [{"x": x, "y": y, "score": score, "expect": expect, "statistic": "difference",
+                 **({"task": task} if task else {})}
+                for x, y, score, expect, task in TRANSFER_HYPOTHESES]
+  return {"name": "own-synergies-transfer", "claim": claim, "final_k": 3, "level_margin": 0.1,
+          "rows": rows, "hypotheses": hypotheses, "decision": decision}
+
+
 def plan_source(seeds, own: int, claim: str, decision: str, plan_dir: pathlib.Path) -> dict:
   """The plan file's JSON: its rows (the own row to run, the comparators by their records,
   relative to `plan_dir`) and hypotheses."""
@@ -187,20 +235,24 @@ def main(argv=None):
   p.add_argument("--seeds", type=int, nargs="+", required=True)
   p.add_argument("--own", type=int, default=3, help="own synergies per task (default: %(default)s)")
   p.add_argument("--steps", type=int, help="train steps (default: the plan row's)")
-  p = sub.add_parser("plan")
-  p.add_argument("--seeds", type=int, nargs="+", required=True)
-  p.add_argument("--own", type=int, default=3)
-  p.add_argument("--claim", required=True)
-  p.add_argument("--decision", required=True)
-  p.add_argument("--out", type=pathlib.Path, required=True, help="the plan file to write")
+  for name in ("plan", "transfer-plan"):
+    p = sub.add_parser(name)
+    p.add_argument("--seeds", type=int, nargs="+", required=True)
+    if name == "plan":
+      p.add_argument("--own", type=int, default=3)
+    p.add_argument("--claim", required=True)
+    p.add_argument("--decision", required=True)
+    p.add_argument("--out", type=pathlib.Path, required=True, help="the plan file to write")
   args = parser.parse_args(argv)
 
-  if args.part == "plan":
+  if args.part in ("plan", "transfer-plan"):
     import json
 
     if args.out.exists():
       parser.error(f"{args.out} exists: a committed plan is never rewritten")
-    source = plan_source(args.seeds, args.own, args.claim, args.decision, args.out.parent)
+    source = (plan_source(args.seeds, args.own, args.claim, args.decision, args.out.parent)
+              if args.part == "plan" else
+              transfer_plan_source(args.seeds, args.claim, args.decision))
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(source, indent=1) + "\n")
     from discosyn_jax.experiments import confirm
