@@ -242,12 +242,14 @@ def _start(trainer: Trainer, run_dir: pathlib.Path, resume: bool, log):
   start = time.perf_counter()
   decoder = start_lib.starting_decoder(trainer)
   own = start_lib.starting_own(trainer, decoder)
-  if trainer.config.decoder_init in config_lib.PRIORS or own is not None:
-    log(f"the decoder starts in the {trainer.config.decoder_init} prior's subspace, each task's "
-        f"{trainer.config.own_synergies} own synergies in its reward prior's outside it "
-        f"(made in {time.perf_counter() - start:.0f} s)" if own is not None else
-        f"the decoder starts in the {trainer.config.decoder_init} prior's subspace (made in "
-        f"{time.perf_counter() - start:.0f} s)")
+  parts = []
+  if trainer.config.decoder_init in config_lib.PRIORS:
+    parts.append(f"the decoder starts in the {trainer.config.decoder_init} prior's subspace")
+  if own is not None:
+    parts.append(f"each task's {trainer.config.own_synergies} own synergies in its reward "
+                 "prior's directions outside the shared start")
+  if parts:
+    log(f"{'; '.join(parts)} (made in {time.perf_counter() - start:.0f} s)")
   return None, trainer.init(decoder_params=decoder, own=own)
 
 
