@@ -121,9 +121,9 @@ SCALES = {
                  (0, 1, 2), per_set={"set2": dict(steps=1200, checkpoint_every=200)}),
     # the `cpu` scale trained 8x as long (12.3 M env steps for set #1, 49 M for set #2), its
     # evaluations as often: with a constant learning rate and nothing scheduled by the run's
-    # length in these rows, a long run's first 300 train steps are the `cpu` run of the same
-    # seed, and its curve gives the success at every budget up to 8x (32-48 min a set #1 run
-    # two side by side on 2 cores); the budget study of the paper's rows
+    # length in the paper's rows, one long run's curve gives its success at every budget up
+    # to 8x (the budget study of the paper's rows; not bit for bit the `cpu` run of its seed:
+    # docs/notes/2026-12-07-c-own-synergies.md)
     "long": Scale(dict(num_envs=64, unroll_length=20, num_minibatches=4, update_epochs=4,
                        steps=2400, eval_every=50, eval_envs=32, checkpoint_every=200), 32, 3000,
                   (0, 1, 2), per_set={"set2": dict(steps=9600, checkpoint_every=400)}),

@@ -480,6 +480,45 @@ def headline_table(records: Records) -> str:
                    "against the first row, over the curve"], rows)
 
 
+# each task's own synergies, exploratory: (place, its tasks' label, the folders of each row,
+# in order: the own row first, then what it is read beside on the same seeds)
+OWN = (
+    ("set #2", ("dice", "valve3", "weight_pull", "screw"),
+     (("DiscoSyn6+3-L-reward-tasknoise-bonuscap", ("own-synergies/set2",)),
+      ("full-action PPO", _seeds("confirm-late-residual/set2-ppo-seed{}", (3, 4))))),
+    ("unseen valve_cw", ("valve_cw",),
+     (("set #1's default frozen + 3 own", _seeds("transfer-learned/own-seed{}", range(3))),
+      ("set #1's default frozen", _seeds("paper/transfer-synergies-set1-seed{}", range(3))),
+      ("full-action PPO", _seeds("paper/transfer-ppo-set1-seed{}", range(3))))),
+    ("sparse valve_goal", ("valve_goal",),
+     (("set #1's default frozen + 3 own", _seeds("transfer-learned/sparse-own-seed{}", range(3))),
+      ("set #1's default frozen", _seeds("paper/sparse-synergies-seed{}", range(3))),
+      ("full-action PPO", _seeds("paper/sparse-ppo-seed{}", range(3))))),
+)
+
+
+def own_table(records: Records) -> str:
+  """Each task's own synergies beside the rows of the same seeds: final, over the curve, the
+  task that lacked room over the curve, and the first reward where the task is sparse."""
+  rows = []
+  for place, task_names, groups in OWN:
+    for label, folders in groups:
+      runs = sorted(records.runs(folders), key=lambda r: r.seed)
+      config = runs[0].config
+      acts = config.n_synergies + config.own_synergies  # PPO's n_synergies: the action size
+      each = lambda values: " / ".join(number(v) for v in values)  # seed by seed
+      first = ([report.first_reward(r, task_names[0]) for r in runs]
+               if place.startswith("sparse") else [])
+      rows.append([place, label, seeds_cell(runs), str(acts),
+                   each([final(r, list(task_names)) for r in runs]),
+                   each([curve(r, list(task_names)) for r in runs]),
+                   each([curve(r, [task_names[0]]) for r in runs]) if len(task_names) > 1 else "–",
+                   " / ".join("none" if f is None else thousands(f) for f in first) or "–"])
+  return markdown(["tasks", "row", "seeds", "a task acts in", "final, seed by seed",
+                   "over the curve", "the dice, over the curve",
+                   "first reward, env steps"], rows)
+
+
 BUILDERS = {
     "budget": budget_table,
     "table1": lambda records: paper_table(records, "set1"),
@@ -491,6 +530,7 @@ BUILDERS = {
     "sparse": sparse_table,
     "quickstart": quickstart_table,
     "headline": headline_table,
+    "own": own_table,
 }
 
 
