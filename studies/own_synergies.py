@@ -73,19 +73,9 @@ def own_found(run_dir: pathlib.Path, outside: float) -> float | None:
 
 
 def train_planted(args) -> list[tuple[str, int, pathlib.Path]]:
-  from discosyn_jax.tasks import assemble
-  from studies.residual_planted import register_outside_tasks
+  from studies.residual_planted import train_each
 
-  names = register_outside_tasks(args.outside)
-  done = []
-  for variant in args.variants:
-    for seed in args.seeds:
-      run_dir = args.out / f"{variant}-outside{args.outside:g}-seed{seed}"
-      if not (run_dir / "closing.json").exists():  # one run at a time; a finished one is kept
-        assemble.train(planted_config(variant, seed, names, args.steps), run_dir,
-                       force=run_dir.exists(), progress=False, log=lambda *a: None)
-      done.append((variant, seed, run_dir))
-  return done
+  return train_each(args.out, args.variants, args.seeds, args.outside, planted_config, args.steps)
 
 
 def measured(run_dir: pathlib.Path, outside: float) -> dict:
@@ -180,11 +170,9 @@ TRANSFER_HYPOTHESES = [  # (x, y, score, expect, task), each a difference of mea
 
 def transfer_config(row: str, seed: int):
   """The TrainConfig `discosyn train TRANSFER_ROWS[row] TRANSFER_SIZE --seed SEED` builds."""
-  from discosyn import cli, commands
+  from studies.transfer_learned import flags_config
 
-  args = cli.build_parser().parse_args(
-      ["train", *f"{TRANSFER_ROWS[row]} {TRANSFER_SIZE} --seed {seed}".split()])
-  return commands.train_config(args)
+  return flags_config(f"{TRANSFER_ROWS[row]} {TRANSFER_SIZE} --seed {seed}")
 
 
 def transfer_plan_source(seeds, claim: str, decision: str) -> dict:

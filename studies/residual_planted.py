@@ -63,6 +63,25 @@ def summary(run_dir: pathlib.Path) -> dict:
           "overlap": overlap}
 
 
+def train_each(out: pathlib.Path, variants, seeds, outside: float, config_of,
+               steps: int | None = None) -> list[tuple[str, int, pathlib.Path]]:
+  """(variant, seed, its folder) of each run, trained one at a time on planted_out<n>
+  (`config_of(variant, seed, task names, steps)` its config); a finished run is kept (its
+  final checkpoint, or its closing evaluation where only its record is left)."""
+  from discosyn_jax.tasks import assemble
+
+  names = register_outside_tasks(outside)
+  done = []
+  for variant in variants:
+    for seed in seeds:
+      run_dir = out / f"{variant}-outside{outside}-seed{seed}"
+      if not ((run_dir / "final").exists() or (run_dir / "closing.json").exists()):
+        assemble.train(config_of(variant, seed, names, steps), run_dir,
+                       force=run_dir.exists(), progress=False, log=lambda *a: None)
+      done.append((variant, seed, run_dir))
+  return done
+
+
 def main(argv=None):
   parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
   parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("runs/residual-planted"))
@@ -73,17 +92,8 @@ def main(argv=None):
   parser.add_argument("--steps", type=int, help="train steps (default: the preset's)")
   args = parser.parse_args(argv)
 
-  from discosyn_jax.tasks import assemble
-
-  names = register_outside_tasks(args.outside)
-  rows = []
-  for variant in args.variants:
-    for seed in args.seeds:
-      run_dir = args.out / f"{variant}-outside{args.outside}-seed{seed}"
-      if not (run_dir / "final").exists():  # one run at a time; a finished one is kept
-        assemble.train(config_for(variant, seed, names, args.steps), run_dir,
-                       force=run_dir.exists(), progress=False, log=lambda *a: None)
-      rows.append((variant, seed, summary(run_dir)))
+  rows = [(variant, seed, summary(run_dir)) for variant, seed, run_dir in
+          train_each(args.out, args.variants, args.seeds, args.outside, config_for, args.steps)]
   print("| variant | seed | env steps | final success | success, mean over the curve | "
         "final return | mean abs D(z) | mean abs rho r | overlap with the span |")
   print("|---|---|---|---|---|---|---|---|---|")

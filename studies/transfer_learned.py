@@ -51,13 +51,17 @@ ROWS = {
 FROM = ("frozen-from", "sparse-from")  # the rows whose source is --source
 
 
-def row_config(row: str, seed: int, source: pathlib.Path | None):
-  """The TrainConfig `discosyn train ROWS[row] SIZE --seed SEED` builds."""
+def flags_config(flags: str):
+  """The TrainConfig `discosyn train FLAGS` builds."""
   from discosyn import cli, commands
 
+  return commands.train_config(cli.build_parser().parse_args(["train", *flags.split()]))
+
+
+def row_config(row: str, seed: int, source: pathlib.Path | None):
+  """The TrainConfig `discosyn train ROWS[row] SIZE --seed SEED` builds."""
   flags = ROWS[row].format(source=source / "decoder.npz" if source else "")
-  args = cli.build_parser().parse_args(["train", *f"{flags} {SIZE} --seed {seed}".split()])
-  return commands.train_config(args)
+  return flags_config(f"{flags} {SIZE} --seed {seed}")
 
 
 def beside(out: pathlib.Path, source: pathlib.Path) -> pathlib.Path:
