@@ -383,8 +383,9 @@ def _grad_norms_by_role(grads) -> dict[str, jax.Array]:
 def _with_start(params, decoder_params, own):
   """`params` with the decoder and the tasks' own synergies a run starts from, where given."""
   inner = dict(params["params"])
-  for name, given, what in (("synergy_decoder", decoder_params, "synergy decoder (identity decoder)"),
-                            ("own_synergies", own, "own synergies (own_synergies = 0)")):
+  for name, given, what, given_is in (
+      ("synergy_decoder", decoder_params, "synergy decoder (identity decoder)", "decoder does"),
+      ("own_synergies", own, "own synergies (own_synergies = 0)", "own synergies do")):
     if given is None:
       continue
     if name not in inner:
@@ -392,7 +393,7 @@ def _with_start(params, decoder_params, own):
     want = jax.tree.map(jnp.shape, inner[name])
     got = jax.tree.map(jnp.shape, given)
     if want != got:
-      raise ValueError(f"the given {name.replace('_', ' ')} do not fit this model: {got} != {want}")
+      raise ValueError(f"the given {given_is} not fit this model: {got} != {want}")
     inner[name] = given
   return {**params, "params": inner}
 
