@@ -484,7 +484,10 @@ def headline_table(records: Records) -> str:
 # in order: the own row first, then what it is read beside on the same seeds)
 OWN = (
     ("set #2", ("dice", "valve3", "weight_pull", "screw"),
-     (("DiscoSyn6+3-L-reward-tasknoise-bonuscap", ("own-synergies/set2",)),
+     (("DiscoSyn6+3-L-reward-tasknoise-bonuscap",
+       _seeds("own-synergies/set2/discosyn6+3-l-reward-tasknoise-bonuscap-set2-seed{}", (3, 4))),
+      ("DiscoSyn6+6-L-reward-tasknoise-bonuscap",
+       _seeds("own-synergies/set2/discosyn6+6-l-reward-tasknoise-bonuscap-set2-seed{}", (3,))),
       ("full-action PPO", _seeds("confirm-late-residual/set2-ppo-seed{}", (3, 4))))),
     ("unseen valve_cw", ("valve_cw",),
      (("set #1's default frozen + 3 own", _seeds("transfer-learned/own-seed{}", range(3))),
