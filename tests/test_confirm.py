@@ -293,6 +293,20 @@ def test_a_verdict_on_planted_numbers_has_the_known_answer(x, y, verdict, holds,
   assert found.verdict == "too few runs" and found.holds is None and found.runs == (1, 1)
 
 
+@pytest.mark.parametrize("damaged", [float("nan"), 7.5, -0.1, "0.5"])
+def test_a_damaged_success_is_refused_naming_the_run_and_the_evaluation(damaged, tmp_path):
+  tasks_ = ["valve0", "valve1"]
+  make = lambda v: [[{t: v for t in tasks_}] * 3 for _ in range(3)]
+  plan = confirm.parse(tiny_plan(rows=[
+      {"name": name, "seeds": [0, 1, 2], "config": confirm.row_fields(TrainConfig(tasks=tuple(tasks_)))}
+      for name in ("late", "default")]))
+  runs = planted_runs(tmp_path, make(0.5), make(0.5))
+  runs[1].evaluations[1]["valve1/success"] = damaged
+  with pytest.raises(ValueError, match=r"late-seed1: valve1/success is .* in the evaluation at "
+                                       r"step 2, not a success in \[0, 1\]"):
+    confirm.verdicts(plan, runs)
+
+
 def test_interleaved_rows_are_not_separated():
   """Two rows whose seeds interleave (0.2, 0.4, ... against 0.3, 0.5, ...) on one task:
   P = 11 / 25 with an interval that spans 0.5 widely: neither above nor level."""

@@ -381,10 +381,28 @@ def judge(p: intervals.Estimate, margin: float, statistic: str = "P") -> str:
   return found
 
 
+def check_successes(run, tasks_) -> None:
+  """Refuse a run whose evaluations (or closing evaluation) hold a success that is not a
+  number in [0, 1], naming the run, the evaluation and the task: a damaged number is never
+  turned into a verdict."""
+  found = [(f"the evaluation at step {row.get('step')}", row) for row in run.evaluations]
+  if run.closing:
+    found.append(("its closing evaluation", run.closing))
+  for where, row in found:
+    for task in tasks_:
+      value = row.get(f"{task}/success")
+      if value is None:
+        continue  # a task this evaluation did not hold: scores() leaves the run out
+      if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value <= 1:
+        raise ValueError(f"{run.path}: {task}/success is {value!r} in {where}, not a success "
+                         "in [0, 1]; the report refuses to judge on it")
+
+
 def scores(runs, tasks_, score: str, final_k: int) -> np.ndarray | None:
   """A runs x tasks matrix of one score of finished runs (None for none)."""
   rows = []
   for run in runs:
+    check_successes(run, tasks_)
     if score == "closing":
       row = run.closing or {}
     elif score == "final":
