@@ -35,7 +35,8 @@ x minus y's (each the mean over tasks of the mean over runs), its interval the b
 with each row's runs resampled on their own: *above* / *below* where the interval clears 0,
 *level* inside 0 +- level_margin / 2 (a difference of success, half P's margin: P moves
 about twice as far as the mean for a shift among a few seeds), else *not separated*: where
-tasks tie at 1.0 (every row solves them) P dilutes a difference and the mean does not. An expectation holds: "above" / "below" / "level" on that verdict;
+tasks tie at 1.0 (every row solves them) P dilutes a difference and the mean does not.
+An expectation holds: "above" / "below" / "level" on that verdict;
 "not below" on any verdict but below; "not above" on any but above. The plan holds where
 every hypothesis holds, and only once every run of its rows has finished.
 """
@@ -88,9 +89,13 @@ class Hypothesis:
 
   @property
   def text(self) -> str:
-    what = ", ".join(filter(None, (self.task, self.score,
+    return f"{self.x} {self.expect} {self.y} ({self.what})"
+
+  @property
+  def what(self) -> str:
+    """Its task (where it names one), score and statistic (where not P), as a label says them."""
+    return ", ".join(filter(None, (self.task, self.score,
                                    "" if self.statistic == "P" else self.statistic)))
-    return f"{self.x} {self.expect} {self.y} ({what})"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -237,6 +242,15 @@ def _row(values, index: int = 0) -> Row:
   return Row(name, tuple(seeds), config, tuple(records))
 
 
+def _differs(saved: TrainConfig, wanted: TrainConfig, whose: str) -> str:
+  """'' where `saved` trains the run `wanted` describes, else its first field that differs,
+  as a refusal says it ("its lr is 0.001, the plan's 0.0003")."""
+  if config_lib.same_run(saved, wanted):
+    return ""
+  field = next(k for k, v in saved.to_dict().items() if getattr(wanted, k) != v)
+  return f"its {field} is {getattr(saved, field)!r}, {whose} {getattr(wanted, field)!r}"
+
+
 def check_records(plan: Plan) -> None:
   """Refuse a plan whose named records are missing, or are not the runs of their row's
   config and seed (a record names the config it ran: config.json)."""
@@ -246,11 +260,9 @@ def check_records(plan: Plan) -> None:
       config_file = path / "config.json"
       if not config_file.is_file():
         raise ValueError(f"row {row.name}: no record of seed {seed} at {path}")
-      saved, wanted = config_lib.load(config_file), row.run_config(seed)
-      if not config_lib.same_run(saved, wanted):
-        field = next(k for k, v in saved.to_dict().items() if getattr(wanted, k) != v)
-        raise ValueError(f"row {row.name}: {path} is not the run of the row's config: its "
-                         f"{field} is {getattr(saved, field)!r}, the row's {getattr(wanted, field)!r}")
+      differs = _differs(config_lib.load(config_file), row.run_config(seed), "the row's")
+      if differs:
+        raise ValueError(f"row {row.name}: {path} is not the run of the row's config: {differs}")
 
 
 def row_fields(config: TrainConfig) -> dict[str, Any]:
@@ -300,12 +312,9 @@ def check_folder(plan: Plan, out: pathlib.Path) -> None:
     for seed in () if row.records else row.seeds:
       config_file = out / row.folder(seed) / "config.json"
       if config_file.is_file():
-        saved = config_lib.load(config_file)
-        wanted = row.run_config(seed)
-        if not config_lib.same_run(saved, wanted):
-          field = next(k for k, v in saved.to_dict().items() if getattr(wanted, k) != v)
-          raise ValueError(f"{config_file.parent} is not the plan's run: its {field} is "
-                           f"{getattr(saved, field)!r}, the plan's {getattr(wanted, field)!r}")
+        differs = _differs(config_lib.load(config_file), row.run_config(seed), "the plan's")
+        if differs:
+          raise ValueError(f"{config_file.parent} is not the plan's run: {differs}")
 
 
 def check_runnable(plan: Plan) -> None:
@@ -468,9 +477,7 @@ def report_lines(plan: Plan, runs) -> list[str]:
     p = "–" if v.p is None else f"{v.p.value:+.3f} [{v.p.low:+.3f}, {v.p.high:+.3f}]" if (
         v.hypothesis.statistic == "difference") else f"{v.p.value:.2f} [{v.p.low:.2f}, {v.p.high:.2f}]"
     holds = "pending" if v.holds is None else "yes" if v.holds else "no"
-    what = ", ".join(filter(None, (v.hypothesis.task, v.hypothesis.score,
-                                   "" if v.hypothesis.statistic == "P" else "difference")))
-    lines.append(f"| {v.hypothesis.x} vs {v.hypothesis.y} ({what}) | "
+    lines.append(f"| {v.hypothesis.x} vs {v.hypothesis.y} ({v.hypothesis.what}) | "
                  f"{v.runs[0]}, {v.runs[1]} | {p} | {v.verdict} | {v.hypothesis.expect} | {holds} |")
   if finished < planned:
     outcome = "The plan is pending: not every planned run has finished."
