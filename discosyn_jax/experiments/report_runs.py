@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import json
 import pathlib
 from typing import Any
 
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import hands
-from discosyn_jax.run import folder, layout
+from discosyn_jax.run import folder, layout, record_files
+from discosyn_jax.run.record_files import RecordError
 from discosyn_jax.experiments import record
 from discosyn_jax.experiments.method import Method, Residual
 from discosyn_jax import tasks
@@ -109,8 +109,15 @@ def load_run(path: pathlib.Path) -> Run:
     task_set = f"{task_set} on {hands.label(config.hand)}"
   fields = {f.name: getattr(run, f.name) for f in dataclasses.fields(folder.Run)}
   return Run(**{**fields, "path": path}, experiment=meta.get("experiment", "train"),
-             method=Method.parse(meta["method"]) if "method" in meta else method_of(config),
+             method=_method(path, meta) if "method" in meta else method_of(config),
              task_set=task_set, seed=meta.get("seed", config.seed), scale=meta.get("scale"))
+
+
+def _method(path: pathlib.Path, meta: dict[str, Any]) -> Method:
+  try:
+    return Method.parse(meta["method"])
+  except ValueError as err:
+    raise RecordError(f"{path / layout.EXPERIMENT_FILE}: method: {err}") from None
 
 
 def find(paths, inside: bool = False, final_k: int = FINAL_K) -> tuple[list[Run], list[dict[str, Any]]]:
@@ -126,7 +133,7 @@ def find(paths, inside: bool = False, final_k: int = FINAL_K) -> tuple[list[Run]
     if (path / layout.CONFIG_FILE).is_file():
       runs.append(dataclasses.replace(load_run(path), final_k=final_k))
     elif (path / record.FIT_FILE).is_file():
-      fits.append(json.loads((path / record.FIT_FILE).read_text()))
+      fits.append(record_files.read_object(path / record.FIT_FILE))
     else:
       inner = sorted(p for p in path.iterdir() if p.is_dir())
       found = find(inner, inside=True, final_k=final_k) if inner else ([], [])

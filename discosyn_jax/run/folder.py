@@ -8,7 +8,6 @@ labels (experiments/report_runs.py), so a figure of a run is computed once, here
 from __future__ import annotations
 
 import dataclasses
-import json
 import pathlib
 from typing import Any
 
@@ -16,7 +15,7 @@ import numpy as np
 
 from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
-from discosyn_jax.run import layout, logs, reading
+from discosyn_jax.run import layout, logs, reading, record_files
 
 FINAL_K = 3  # evaluations whose mean is a run's final success (the report's, a synergy file's)
 
@@ -85,13 +84,35 @@ def finished(run_dir: pathlib.Path, config: TrainConfig, evaluations: list[dict[
 
 def read(path, config: TrainConfig | None = None) -> Run:
   """The run of a run folder (or of a checkpoint folder in one); `config`: its config as
-  already read (a record's decoder_from found where the folder is now, say)."""
+  already read (a record's decoder_from found where the folder is now, say). A file of it
+  that does not hold what a run writes is refused (record_files.RecordError)."""
   run_dir = reading.find_run_dir(pathlib.Path(path))
   config = config or config_lib.load(run_dir / layout.CONFIG_FILE)
   evaluations = logs.read_log(run_dir / layout.EVAL_FILE)
   closing_file, labels_file = run_dir / layout.CLOSING_FILE, run_dir / layout.EXPERIMENT_FILE
+  closing = record_files.read_closing(closing_file) if closing_file.is_file() else None
+  labels = record_files.read_labels(labels_file) if labels_file.is_file() else {}
+  _check_ended(run_dir, evaluations, [f.name for f in (labels_file, closing_file) if f.is_file()])
   return Run(path=run_dir, config=config, evaluations=evaluations,
              metrics=logs.read_log(run_dir / layout.METRICS_FILE, as_archived=True),
-             closing=json.loads(closing_file.read_text()) if closing_file.is_file() else None,
-             labels=json.loads(labels_file.read_text()) if labels_file.is_file() else {},
-             finished=finished(run_dir, config, evaluations))
+             closing=closing, labels=labels, finished=finished(run_dir, config, evaluations))
+
+
+def _check_ended(run_dir: pathlib.Path, evaluations, ended: list[str]) -> None:
+  """A run that ended (`ended`: its files written at its end, after its last evaluation)
+  has every evaluation whole: none gone, no last line cut short as a kill leaves it."""
+  if not ended:
+    return
+  path = run_dir / layout.EVAL_FILE
+  if not evaluations:
+    raise record_files.RecordError(
+        f"{path}: no evaluation, but the run ended ({ended[0]} is written at its end); "
+        "expected its evaluations, the last at its final step")
+  if not path.is_file():  # read from its archive alone
+    return
+  with open(path, "rb") as f:
+    f.seek(-1, 2)
+    if f.read(1) != b"\n":
+      raise record_files.RecordError(
+          f"{path}: its last line is cut short, but the run ended ({ended[0]} is written at "
+          "its end); expected every evaluation whole")

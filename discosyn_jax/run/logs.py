@@ -12,7 +12,8 @@ import pathlib
 import time
 
 from discosyn_jax import atomic
-from discosyn_jax.run import layout
+from discosyn_jax.run import layout, record_files
+from discosyn_jax.run.record_files import RecordError
 
 # A kept run's bulky log compressed (a run's record keeps metrics.jsonl as
 # metrics.jsonl.xz, `archive`); readers take either.
@@ -25,27 +26,36 @@ ARCHIVED_DIGITS = 5
 _AXES = frozenset({"step", "env_steps", "wall_s", "finite"})
 
 
-def read_jsonl(path: pathlib.Path) -> list[dict]:
+def read_jsonl(path: pathlib.Path, check=None) -> list[dict]:
   """The rows of a JSON-lines file. A last line cut short (a run killed while writing it)
-  is left out; any other line that is not a JSON object is an error."""
+  is left out; any other line that is not a JSON object, or that `check(row)` finds wrong
+  (its words, None for nothing), is a RecordError naming the file and the line."""
   path = pathlib.Path(path)
   if not path.is_file():
     raise ValueError(f"{path} does not exist")
   opener = lzma.open if path.suffix == ARCHIVED else open
-  with opener(path, "rt") as f:
-    lines = f.read().splitlines(keepends=True)
+  try:
+    with opener(path, "rt") as f:
+      lines = f.read().splitlines(keepends=True)
+  except UnicodeDecodeError:
+    raise RecordError(f"{path}: not text (a byte that is not UTF-8); expected JSON lines") from None
+  except (lzma.LZMAError, EOFError) as err:  # a damaged or cut archive
+    raise RecordError(f"{path}: not a whole .xz archive ({err})") from None
   rows = []
   for number, line in enumerate(lines, 1):
     if not line.strip():
       continue
     try:
       row = json.loads(line)
-    except json.JSONDecodeError:
+    except (json.JSONDecodeError, RecursionError):
       if number == len(lines) and not line.endswith("\n"):
         break
-      raise ValueError(f"{path}, line {number}: not JSON") from None
+      raise RecordError(f"{path}, line {number}: not JSON") from None
     if not isinstance(row, dict):
-      raise ValueError(f"{path}, line {number}: not a JSON object")
+      raise RecordError(f"{path}, line {number}: not a JSON object")
+    wrong = check(row) if check else None
+    if wrong:
+      raise RecordError(f"{path}, line {number}: {wrong}")
     rows.append(row)
   return rows
 
@@ -53,11 +63,13 @@ def read_jsonl(path: pathlib.Path) -> list[dict]:
 def read_log(path: pathlib.Path, as_archived: bool = False) -> list[dict]:
   """The rows of the log at `path` or of its archive `path`.xz; none when neither exists.
   `as_archived`: the numbers at the archive's precision either way (a run and its record
-  then read the same)."""
+  then read the same). An eval.jsonl's rows are checked (record_files.evaluation_check)
+  wherever it is read: a damaged one never reaches a table."""
   path = pathlib.Path(path)
+  check = record_files.evaluation_check() if path.name == layout.EVAL_FILE else None
   for candidate in (path, path.with_name(path.name + ARCHIVED)):
     if candidate.is_file():
-      rows = read_jsonl(candidate)
+      rows = read_jsonl(candidate, check)
       return [{k: _archived(v) for k, v in row.items()} for row in rows] if as_archived else rows
   return []
 
