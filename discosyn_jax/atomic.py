@@ -1,6 +1,8 @@
 """Writes that a kill at any instant leaves either undone or done, never half done.
 
-A file is written beside its target and renamed over it. A folder is written as
+A file is written beside its target under a name of this write's own (`unique`: two
+processes writing one file never write into the same temporary file) and renamed over it;
+a write that fails removes it. A folder is written as
 `NAME.new`, then swapped in: `NAME` -> `NAME.old`, `NAME.new` -> `NAME`, and `NAME.old`
 removed (through `NAME.trash`). Whatever instant a kill hits, `NAME` or `NAME.old` holds a
 complete folder; `settle` finishes or undoes an interrupted swap.
@@ -8,8 +10,10 @@ complete folder; `settle` finishes or undoes an interrupted swap.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import pathlib
+import secrets
 import shutil
 
 NEW, OLD, TRASH = ".new", ".old", ".trash"
@@ -24,16 +28,35 @@ def fsync_dir(path: pathlib.Path) -> None:
     os.close(fd)
 
 
-def write_text(path: pathlib.Path, text: str) -> None:
-  """Replace the file at `path` by `text` in one step."""
+def unique(path: pathlib.Path, suffix: str = "") -> pathlib.Path:
+  """A name beside `path` for one write of it: the process and a random part in it, so that
+  no other write, in this process or another, picks it; `suffix` ends it (np.savez adds
+  ".npz" to a name without it)."""
   path = pathlib.Path(path)
-  tmp = path.with_name(path.name + NEW)
-  with open(tmp, "w") as f:
+  return path.with_name(f"{path.name}.{os.getpid()}-{secrets.token_hex(4)}{NEW}{suffix}")
+
+
+@contextlib.contextmanager
+def replacing(path: pathlib.Path, suffix: str = ""):
+  """The temporary path (`unique`) to write `path`'s new content to: renamed over `path`
+  when the block ends, removed when it fails."""
+  path = pathlib.Path(path)
+  tmp = unique(path, suffix)
+  try:
+    yield tmp
+    os.replace(tmp, path)
+  except BaseException:
+    tmp.unlink(missing_ok=True)  # nothing half-written left beside it
+    raise
+  fsync_dir(path.parent)
+
+
+def write_text(path: pathlib.Path, text: str) -> None:
+  """Replace the file at `path` by `text` in one step (the file made with the user's umask)."""
+  with replacing(path) as tmp, open(tmp, "x") as f:
     f.write(text)
     f.flush()
     os.fsync(f.fileno())
-  os.replace(tmp, path)
-  fsync_dir(path.parent)
 
 
 def sibling(path: pathlib.Path, suffix: str) -> pathlib.Path:

@@ -64,7 +64,7 @@ def write(run_dir: pathlib.Path, trainer, state) -> None:
                decoder_init=meta["decoder_init"])
   if not config.freeze_decoder:
     z = {task: samples.astype(np.float16) for task, samples in z_samples(trainer, state).items()}
-    tmp = run_dir / (layout.Z_FILE + ".new.npz")  # written whole, then renamed
+    tmp = atomic.unique(run_dir / layout.Z_FILE, ".npz")  # written whole, then renamed
     np.savez(tmp, **z)
     tmp.replace(run_dir / layout.Z_FILE)
 
