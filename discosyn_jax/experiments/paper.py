@@ -161,10 +161,12 @@ class Train:
     record.write(run_dir, done["trainer"], done["state"])
 
   def settle(self, out: pathlib.Path, log) -> None:
-    """Complete what a finished run lacks of its record: its experiment.json (a run of the
-    same config that `discosyn train` made in this folder), the files a run finished before
-    records were written lacks (from its final checkpoint)."""
+    """Complete what a finished run lacks: the lock and curves a writer killed after its
+    final checkpoint left (assemble.finish), its experiment.json (a run of the same config
+    that `discosyn train` made in this folder), the files of its record a run finished
+    before records were written lacks (from its final checkpoint)."""
     run_dir = out / self.name
+    assemble.finish(run_dir, log)  # a writer killed after its final checkpoint: lock, curves
     if not (run_dir / layout.EXPERIMENT_FILE).is_file():
       self.label(out)
     if not record.complete(run_dir, record.saved_config(run_dir)):

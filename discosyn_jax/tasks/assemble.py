@@ -39,11 +39,29 @@ def train(config: TrainConfig, run_dir, *, resume: bool = False, force: bool = F
   config = reading.run_config(run_dir, config, resume, force)  # the run's own, when resuming
   built = trainer(config, **trainer_kwargs)
 
-  def curves() -> None:
-    log(f"training curves: {', '.join(map(str, plots.run_curves(run_dir, run_dir / layout.PLOTS_DIR)))}")
-
   return loop.train(built, run_dir, resume=resume, force=force, progress=progress, log=log,
-                    stop_at=stop_at, on_eval=on_eval, on_end=curves)
+                    stop_at=stop_at, on_eval=on_eval, on_end=lambda: _curves(run_dir, log))
+
+
+def _curves(run_dir: pathlib.Path, log) -> None:
+  log(f"training curves: {', '.join(map(str, plots.run_curves(run_dir, run_dir / layout.PLOTS_DIR)))}")
+
+
+def finish(run_dir, log=print) -> None:
+  """What a finished run's writer did not get to before it died (killed after its final
+  checkpoint): its lock left behind is taken over (one warning) and released, its missing
+  training curves drawn. A run a live process writes is left to it."""
+  run_dir = pathlib.Path(run_dir)
+  missing = (run_dir / layout.FINAL).is_dir() and not all(
+      (run_dir / layout.PLOTS_DIR / name).is_file() for name in plots.CURVES)
+  if not (missing or (run_dir / layout.LOCK).exists()) or owner.writer_of(run_dir):
+    return
+  try:
+    with owner.Writer(run_dir):
+      if missing:
+        _curves(run_dir, log)
+  except owner.Busy:  # taken by a live writer since the look above: it finishes the run
+    pass
 
 
 def load(path, **changes) -> tuple[Trainer, TrainState]:

@@ -85,6 +85,9 @@ def _losses_figure(config, metrics, path: pathlib.Path, title: str) -> None:
   plt.close(fig)
 
 
+CURVES = ("success.png", "return.png", "losses.png")  # what run_curves draws, in RUN/plots
+
+
 def run_curves(run_dir: pathlib.Path, out_dir: pathlib.Path) -> list[pathlib.Path]:
   """Write success.png, return.png and losses.png of the run in `run_dir` into `out_dir`
   (replacing them: they are drawn from the run's logs); return their paths."""
@@ -92,7 +95,7 @@ def run_curves(run_dir: pathlib.Path, out_dir: pathlib.Path) -> list[pathlib.Pat
   config, metrics, evals = read_run(run_dir)
   out_dir.mkdir(parents=True, exist_ok=True)
   name = run_dir.resolve().name
-  paths = [out_dir / "success.png", out_dir / "return.png", out_dir / "losses.png"]
+  paths = [out_dir / name for name in CURVES]
   _per_task_figure(config, metrics, evals, "success", paths[0], f"{name}: success")
   _per_task_figure(config, metrics, evals, "return", paths[1], f"{name}: return")
   _losses_figure(config, metrics, paths[2], f"{name}: losses")
