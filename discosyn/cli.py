@@ -202,7 +202,8 @@ def build_parser() -> argparse.ArgumentParser:
   p.set_defaults(fn=commands.cmd_report)
 
   p = sub.add_parser("upgrade", help="write into the config.json of runs made by an older "
-                     "release the fields added since, with the values it ran")
+                     "release the fields added since, with the values it ran, and thin a "
+                     "record's metrics to what a record keeps")
   p.add_argument("runs", nargs="+", help="run directories")
   p.set_defaults(fn=commands.cmd_upgrade)
 

@@ -301,11 +301,15 @@ def cmd_keep(args) -> None:
 
 def cmd_upgrade(args) -> None:
   from discosyn_jax import config as config_lib
-  from discosyn_jax.run import owner, reading
+  from discosyn_jax.run import logs, owner, reading
 
   for run in map(pathlib.Path, args.runs):
     owner.refuse_if_written(run)
-    added = config_lib.upgrade(reading.find_run_dir(run) / layout.CONFIG_FILE)
+    run_dir = reading.find_run_dir(run)
+    added = config_lib.upgrade(run_dir / layout.CONFIG_FILE)
+    archived = run_dir / (layout.METRICS_FILE + logs.ARCHIVED)
+    if archived.is_file():  # a record's metrics: to what a record keeps today
+      logs.archive(archived)
     print(f"{run}: {'added ' + ', '.join(added) if added else 'up to date'}")
 
 

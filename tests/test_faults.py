@@ -823,8 +823,16 @@ def test_a_config_file_missing_a_field_is_named_never_filled_in(unbroken, tmp_pa
   assert cli.main(["eval", str(run_dir)]) == 2
   one_error_line(capsys, "missing config field(s): ", f"discosyn upgrade {run_dir}` adds ",
                  "squash_z = false")
+  # ... and a record's metrics archive of an older release is thinned to what a record keeps
+  import lzma
+
+  from discosyn_jax.run import logs
+  rows = [{"step": s, "loss": 0.5, "a/reward": s / 8} for s in range(1, 41)]
+  (run_dir / "metrics.jsonl.xz").write_bytes(
+      lzma.compress("".join(json.dumps(r) + "\n" for r in rows).encode()))
   assert cli.main(["upgrade", str(run_dir)]) == 0
   assert config_lib.load(run_dir / "config.json") == TOY.replace(**config_lib.ADDED)
+  assert logs.read_jsonl(run_dir / "metrics.jsonl.xz") == logs.kept(rows) != rows
 
 
 @pytest.mark.parametrize("how, fragment", [

@@ -55,22 +55,43 @@ def test_an_archived_log_reads_as_the_log_itself(toy_run, tmp_path):
   (tmp_path / (layout.METRICS_FILE + logs.ARCHIVED)).write_bytes(lzma.compress(plain.read_bytes()))
   assert not kept.exists() and logs.read_log(kept) == rows
   assert logs.read_log(tmp_path / layout.EVAL_FILE) == []
-  # a record's archive (`archive`): the same rows, fractions to 5 significant digits, counts
-  # and steps exact; the log itself stays
+  # a record's archive (`archive`): the rows a record keeps (all four here: the last ones),
+  # without the loss diagnostics, fractions to 5 significant digits, counts and steps exact;
+  # the log itself stays
   archived = logs.read_jsonl(logs.archive(plain))
   assert plain.is_file() and len(archived) == len(rows)
   for row, kept_row in zip(rows, archived):
-    assert kept_row.keys() == row.keys()
-    for key, value in row.items():
+    assert "loss" in row and set(kept_row) == set(row) - {"loss", "env_steps_per_s"} - {
+        k for k in row if k.endswith(("/approx_kl", "/clip_fraction", "/policy_loss", "/value_loss"))}
+    for key, value in kept_row.items():
+      value = row[key]
       exact = not isinstance(value, float) or value.is_integer()
       assert kept_row[key] == (value if exact else pytest.approx(value, rel=1e-4, abs=0))
       if not exact:
         # at most 5 significant digits: printing it with 5 gives it back (13482.0 included)
         assert float(f"{kept_row[key]:.5g}") == kept_row[key]
-  # read at the archive's precision, the log and its archive are the same rows (the report
-  # of a run and of its record agree to the digit)
-  assert logs.read_log(plain, as_archived=True) == archived
+  # read at the archive's precision, the log's kept rows and its archive are the same (the
+  # report of a run and of its record agree to the digit)
+  assert logs.kept(logs.read_log(plain, as_archived=True)) == archived
   assert logs.read_log(kept.with_name("none.jsonl"), as_archived=True) == []
+  # thinning the archive again changes nothing
+  assert logs.read_jsonl(logs.archive(plain.with_name(plain.name + logs.ARCHIVED))) == archived
+
+
+def test_a_record_keeps_an_even_sample_the_last_steps_and_each_first_reward():
+  unroll = 20
+  rows = [{"step": s, "env_steps": 40 * s, "a/reward": s / 7, "a/policy_loss": 0.5, "loss": 1.5,
+           "a/first_reward_t": 9 if s == 37 else (3 if s > 37 else unroll),
+           "b/first_reward_t": unroll, "grad_norm/heads": 0.25} for s in range(1, 201)]
+  kept = logs.kept(rows)
+  steps = [r["step"] for r in kept]
+  assert steps == sorted(set(range(4, 185, logs.RECORD_EVERY)) | {37} | set(range(185, 201)))
+  assert all(set(r) == {"step", "env_steps", "a/reward", "a/first_reward_t", "b/first_reward_t",
+                        "grad_norm/heads"} for r in kept)
+  assert logs.kept(kept) == kept and logs.kept([]) == []
+  # an even sample: a mean over a window moves by less than a step's change
+  window = [r["a/reward"] for r in rows if r["step"] <= 100]
+  assert abs(np.mean([r["a/reward"] for r in kept if r["step"] <= 100]) - np.mean(window)) < 2 / 7
 
 
 def test_tensorboard_holds_the_jsonl_numbers_over_env_steps(toy_run):

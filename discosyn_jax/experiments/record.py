@@ -9,7 +9,7 @@ closing.json (the closing evaluation, written by the loop) and experiment.json:
                     read, and the report's learned subspaces
   z.npz             the z the deterministic policy picks on each task (float16, a few
                     thousand points), runs whose decoder is learned (DiscoSyn): the t-SNE
-  metrics.jsonl.xz  metrics.jsonl compressed
+  metrics.jsonl.xz  the rows of metrics.jsonl a record keeps (run/logs.py `kept`), compressed
 A fit folder's record is its explained_variance.json and synergy files (its actions.npz,
 megabytes, is left out: no later step reads it); a matched control's decoder folder holds
 its decoder.npz. `keep` copies the records of a folder of runs (`discosyn keep OUT DEST`);

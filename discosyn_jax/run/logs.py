@@ -22,6 +22,15 @@ ARCHIVED = ".xz"
 # the archive is less than half the size of one with every float's 17 digits
 ARCHIVED_DIGITS = 5
 
+# What an archive keeps of a run's metrics.jsonl (a record's metrics: what the reports,
+# figures and studies read, at a fifth of the size): every RECORD_EVERY-th train step (an
+# even sample: means over a window stay means), the last RECORD_ENDS (what the
+# tables' means over the last steps read), the row where a task's first reward shows; and not the update's loss diagnostics (none of
+# them is read from a record; the run's own log keeps them).
+RECORD_EVERY, RECORD_ENDS = 4, 16
+_LEFT_OUT = frozenset({"approx_kl", "clip_fraction", "policy_loss", "value_loss", "loss",
+                       "env_steps_per_s"})
+
 # bookkeeping columns of the rows: the x axes, not curves of their own
 _AXES = frozenset({"step", "env_steps", "wall_s", "finite"})
 
@@ -76,16 +85,34 @@ def read_log(path: pathlib.Path, as_archived: bool = False) -> list[dict]:
 
 def archive(path: pathlib.Path) -> pathlib.Path:
   """Write `path`.xz beside the log at `path` (in one step: a kill leaves the old one or
-  none), its rows with every fractional number to ARCHIVED_DIGITS significant digits
-  (counts, steps and integral values exact); the log itself stays, the loop appends to it."""
+  none): the rows a record keeps (`kept`), every fractional number to ARCHIVED_DIGITS
+  significant digits (counts, steps and integral values exact); the log itself stays, the
+  loop appends to it. `path` may be the archive itself (an older record, thinned again)."""
   path = pathlib.Path(path)
-  target = path.with_name(path.name + ARCHIVED)
+  target = path if path.suffix == ARCHIVED else path.with_name(path.name + ARCHIVED)
+  rows = kept(read_jsonl(path))
   tmp = target.with_name(target.name + atomic.NEW)
   with lzma.open(tmp, "wt", preset=9) as f:
-    for row in read_jsonl(path):
+    for row in rows:
       f.write(json.dumps({key: _archived(value) for key, value in row.items()}) + "\n")
   tmp.replace(target)
   return target
+
+
+def kept(rows: list[dict]) -> list[dict]:
+  """The rows and columns of a metrics log that its archive keeps (RECORD_EVERY); the same
+  rows again when given them (thinning an archive twice changes nothing)."""
+  first, found = rows[0] if rows else {}, set()
+  out = []
+  for n, row in enumerate(rows):
+    news = {key for key, value in row.items() if key.endswith("/first_reward_t")
+            and key not in found and value != first.get(key)}
+    found |= news
+    if (row.get("step", n) % RECORD_EVERY == 0 or n >= len(rows) - RECORD_ENDS
+        or news):
+      out.append({key: value for key, value in row.items()
+                  if key.rpartition("/")[2] not in _LEFT_OUT})
+  return out
 
 
 def _archived(value):
