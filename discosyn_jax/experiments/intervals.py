@@ -77,11 +77,25 @@ def score_distribution(scores: np.ndarray, levels: np.ndarray) -> np.ndarray:
 
 
 # -- their intervals --------------------------------------------------------------
+_seed = [SEED]  # the bootstrap's seed now: SEED, or another under `bootstrap_seed`
+
+
 @contextlib.contextmanager
-def _seeded(seed: int = SEED):
-  """NumPy's global random state at `seed` for rliable's bootstrap, restored afterwards."""
+def bootstrap_seed(seed: int):
+  """Every interval computed inside bootstraps from `seed`: whether a verdict is the
+  bootstrap's or the data's (results_page reads each at several seeds)."""
+  _seed.append(seed)
+  try:
+    yield
+  finally:
+    _seed.pop()
+
+
+@contextlib.contextmanager
+def _seeded():
+  """NumPy's global random state at the bootstrap's seed for rliable, restored afterwards."""
   state = np.random.get_state()
-  np.random.seed(seed)
+  np.random.seed(_seed[-1])
   try:
     yield
   finally:
