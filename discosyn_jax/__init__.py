@@ -37,6 +37,10 @@ if _sys.platform.startswith("linux") and not _os.environ.get("DISPLAY"):
 
 __version__ = "0.1.0"
 
+# MJX's "Failed to import warp" lines kept back wherever MJX is imported from now on, by
+# Brax in a user's script too (no JAX imported here)
+from discosyn_jax import quiet_mjx as _quiet_mjx  # noqa: E402,F401
+
 
 
 
@@ -58,7 +62,7 @@ _API = {
     "TaskConfig": ("discosyn_jax.env.task", "TaskConfig"),
     "TASK_SETS": ("discosyn_jax.tasks.sets", "TASK_SETS"),
     "task_names": ("discosyn_jax.tasks.registry", "names"),
-    "make_env": ("discosyn_jax.tasks.registry", "make"),
+    "make_env": ("discosyn_jax.api", "make_env"),
     "register_task": ("discosyn_jax.tasks.registry", "register"),
     "load_task": ("discosyn_jax.tasks.registry", "load"),
     "train": ("discosyn_jax.api", "train"),

@@ -36,6 +36,17 @@ def train(config: TrainConfig | str = "quickstart", run_dir: str | pathlib.Path 
   return {**done, "run_dir": run_dir}
 
 
+def make_env(name: str, **kwargs):
+  """The Brax env of task `name` (tasks.registry.make: backend, physics, hand, task settings
+  as keywords), its `success` metric summed over an episode the success at the episode's
+  last step (env/wrappers.py: EpisodeSuccess): Brax's `eval/episode_success` is then the
+  share of episodes that end in success, 0-1. The state's own success: `info["success"]`."""
+  from discosyn_jax.env import wrappers
+  from discosyn_jax.tasks import registry
+
+  return wrappers.EpisodeSuccess(registry.make(name, **kwargs))
+
+
 def evaluate(run: str | pathlib.Path, *, episodes: int | None = None,
              backend: str | None = None) -> dict[str, dict[str, float]]:
   """The deterministic policy of a run (its newest good checkpoint) or of one checkpoint:

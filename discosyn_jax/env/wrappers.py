@@ -81,6 +81,39 @@ class FreshResetWrapper(Wrapper):
         obs=where_done(fresh.obs, state.obs), info=info)
 
 
+class EpisodeSuccess(Wrapper):
+  """The env a user is given (`ds.make_env`): its `success` metric reported so that its sum
+  over an episode is the success at the episode's last step, whatever step ends it; the
+  success of the state itself is `info["success"]`.
+
+  Brax's EvalWrapper sums each metric over an episode: `eval/episode_success` then reads as
+  the share of episodes that end in success (0-1), as this package's evaluations do. Each
+  step reports the change since what the episode has reported so far. A new episode starts
+  from 0 at reset, and where Brax's EpisodeWrapper counts the steps, at its step 0 (Brax's
+  auto-reset keeps the info of the episode before; action_repeat 1, Brax's default)."""
+
+  def reset(self, rng: jax.Array) -> State:
+    state = self.env.reset(rng)
+    if "success" not in state.metrics:
+      return state
+    level = state.metrics["success"]
+    info = {**state.info, "success": level, "success_reported": jnp.zeros_like(level)}
+    return state.replace(metrics={**state.metrics, "success": jnp.zeros_like(level)}, info=info)
+
+  def step(self, state: State, action: jax.Array) -> State:
+    if "success_reported" not in state.info:
+      return self.env.step(state, action)
+    reported = state.info["success_reported"]
+    if "steps" in state.info:
+      reported = jnp.where(state.info["steps"] == 0, jnp.zeros_like(reported), reported)
+    before, state = state, self.env.step(state, action)
+    level = state.metrics["success"]
+    info = {**state.info, "success": level, "success_reported": level}
+    # keys that wrappers outside add (Brax's EvalWrapper: "reward") kept through their scans
+    metrics = {**before.metrics, **state.metrics, "success": level - reported}
+    return state.replace(metrics=metrics, info=info)
+
+
 def for_training(env: Env, reset_pool: bool = False) -> Env:
   """Batched (reset takes keys of shape (B, 2)), time-limited at `env.episode_length`,
   auto-resetting with fresh initial states (or from a pool of them: FreshResetWrapper)."""
