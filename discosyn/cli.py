@@ -28,6 +28,16 @@ def _yes_no(text: str) -> bool:
   return text == "yes"
 
 
+def _shipped_synergies() -> list[str]:
+  """The names of the synergy files that ship (synergies/shipped/), found without JAX."""
+  import pathlib
+
+  import discosyn_jax
+
+  return sorted(p.stem for p in (pathlib.Path(discosyn_jax.__file__).parent / "synergies"
+                                 / "shipped").glob("*.npz"))
+
+
 def build_parser() -> argparse.ArgumentParser:
   from discosyn_jax import config as config_lib
   from discosyn_jax.env import settings
@@ -62,9 +72,10 @@ def build_parser() -> argparse.ArgumentParser:
                    type={str: None, bool: _yes_no}.get(kind, kind), choices=choices.get(field),
                    metavar="{yes,no}" if kind is bool else None,
                    help=f"{docs[field]}; {preset_default(field)}")
-  p.add_argument("--decoder-from", help="learn in the frozen synergy space of a run folder or a "
-                 "synergy file (.npz): its decoder, no discriminator bonus or decoder entropy "
-                 "(default: none, the decoder is learned)")
+  p.add_argument("--decoder-from", help="learn in the frozen synergy space of a run folder, a "
+                 "synergy file (.npz) or a shipped synergy file's name "
+                 f"({', '.join(_shipped_synergies())}): its decoder, no discriminator bonus or "
+                 "decoder entropy (default: none, the decoder is learned)")
   p.add_argument("--stop-at", type=float, help="end the run at the first evaluation at which "
                  "every task's deterministic success is at least this, 0-1 (default: run all "
                  "--steps)")
@@ -149,8 +160,9 @@ def build_parser() -> argparse.ArgumentParser:
                  "0 1 2 for cpu and gpu, 0 for ci)")
   p.add_argument("--out", default="runs/experiments",
                  help="folder of the experiment's runs (default: %(default)s)")
-  p.add_argument("--decoder-from", help="transfer / sparse: the frozen decoder of this run folder "
-                 "or synergy file, instead of training their own DiscoSyn run first (default: none)")
+  p.add_argument("--decoder-from", help="transfer / sparse: the frozen decoder of this run folder, "
+                 f"synergy file or shipped name ({', '.join(_shipped_synergies())}), instead of "
+                 "training their own DiscoSyn run first (default: none)")
   p.add_argument("--methods", nargs="+", metavar="METHOD",
                  help="only these methods' runs and the runs they need, e.g. DiscoSyn3-L "
                  "Random3-L, or PCA4 (with its PPO run and fit); default: every method")

@@ -89,6 +89,16 @@ def test_a_finished_run_ends_with_the_next_commands_filled_in(tmp_path):
   assert "synergies" not in ppo
 
 
+def test_decoder_from_help_names_the_shipped_synergy_files():
+  from discosyn_jax.synergies import fitting
+
+  shipped = sorted(path.stem for path in fitting.SHIPPED.glob("*.npz"))
+  assert "shadow20-set1" in shipped
+  for command in ("train", "experiment"):
+    (flag,) = [a for a in subcommands(cli.build_parser())[command]._actions if a.dest == "decoder_from"]
+    assert ", ".join(shipped) in flag.help, flag.help
+
+
 def test_the_train_flags_help_is_their_fields_own_documentation():
   docs = config_lib.field_docs()
   assert docs["alpha2"].startswith("weight of the discriminator reward log q(z|a)")
