@@ -26,6 +26,9 @@ PRIORS = {"objects": ("objects", "trace"), "reward": ("reward", "share")}
 # a start's name in the files of older releases: the objects prior was "physics" until
 # 2026-12-05 (config files and synergy files are read with today's name)
 OLD_STARTS = {"physics": "objects"}
+# decoder_init as config.json writes it where the decoder is read from decoder_from: the
+# start is that decoder (in memory "random", the start of no prior: what the code compares)
+GIVEN_START = "decoder_from"
 DECODER_INITS = ("auto", "random", *PRIORS)
 # what q(.|a) reads back from an action: the head's z (the paper's), or the activation the
 # decoder read, tanh(z) where z is bounded (the same as z where it is not)
@@ -78,7 +81,8 @@ class TrainConfig:
   # the actions that move the tasks' objects most, pooled; reward, the actions that change
   # what each task rewards, each task its share of the directions in turn; auto: reward for
   # a linear decoder learned from scratch, random for any other (the config holds the start
-  # it resolved to, so a run's config.json names it)
+  # it resolved to, so a run's config.json names it; decoder_from there where the decoder
+  # is read from decoder_from)
   decoder_init: str = "auto"
   # the initial decoder: a run directory (its latest checkpoint's decoder) or a synergy file
   # written by discosyn_jax.synergies.fitting (PCA / autoencoder); "" starts from a random one
@@ -317,7 +321,12 @@ class TrainConfig:
     missing = [name for name in fields if name not in values]
     if missing:
       raise ValueError(f"missing config field(s): {', '.join(missing)}")
-    values = {**values, "decoder_init": OLD_STARTS.get(values["decoder_init"], values["decoder_init"])}
+    init = values["decoder_init"]
+    if init == GIVEN_START:
+      if not values["decoder_from"]:
+        raise ValueError(f"decoder_init is {GIVEN_START}, but no decoder_from is given")
+      init = "random"
+    values = {**values, "decoder_init": OLD_STARTS.get(init, init)}
     # JSON has no tuples
     return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in values.items()})
 
@@ -348,7 +357,12 @@ def with_added(values: dict[str, Any]) -> tuple[dict[str, Any], list[str]]:
 
 
 def save(config: TrainConfig, path) -> None:
-  atomic.write_text(path, json.dumps(config.validate().to_dict(), indent=1))
+  """Write `config` to the file at `path`; a decoder read from decoder_from is said to start
+  there (GIVEN_START), not at "random"."""
+  values = config.validate().to_dict()
+  if values["decoder_from"] and values["decoder_init"] == "random":
+    values["decoder_init"] = GIVEN_START
+  atomic.write_text(path, json.dumps(values, indent=1))
 
 
 def load(path) -> TrainConfig:

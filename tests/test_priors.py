@@ -2,6 +2,9 @@
 objects most, or that change what each task rewards, the same for every seed; each seed's
 decoder starts in that subspace with its own scale and bias."""
 
+import json
+import pathlib
+
 import numpy as np
 import pytest
 
@@ -12,6 +15,7 @@ from discosyn_jax.synergies import diagnostics, fitting, priors, start
 from discosyn_jax.experiments import presets
 from discosyn_jax.experiments.method import Method
 
+ROOT = pathlib.Path(__file__).resolve().parents[1]
 TINY = dict(num_envs=2, unroll_length=4, num_minibatches=2, update_epochs=1, steps=1,
             eval_every=0, eval_envs=2, checkpoint_every=0, backend="native")
 
@@ -203,3 +207,32 @@ def test_the_prior_read_at_a_policys_states_sees_what_only_that_policy_reaches(m
   policy_states = priors.basis([env], 1, "reward", acts=[opener])
   assert abs(random_states[1, 0]) == pytest.approx(1.0, abs=1e-5)  # before the gate: action 1
   assert abs(policy_states[0, 0]) == pytest.approx(1.0, abs=1e-5)  # past it: action 0
+
+
+def test_a_transfer_runs_config_file_says_its_decoder_starts_at_its_decoder_from(tmp_path, capsys):
+  """In memory a decoder read from decoder_from has no start of its own ("random": what every
+  comparison of configs reads); config.json names where it starts instead."""
+  from discosyn import cli, commands
+
+  args = cli.build_parser().parse_args(["train", "--tasks", "valve_cylinder",
+                                        "--decoder-from", "shadow20-set1"])
+  config = commands.train_config(args)
+  assert config.decoder_init == "random" and config.decoder_from == "shadow20-set1"
+  path = tmp_path / "config.json"
+  config_lib.save(config, path)
+  saved = json.loads(path.read_text())
+  assert saved["decoder_init"] == config_lib.GIVEN_START == "decoder_from"
+  assert config_lib.load(path) == config
+  assert Method.of(saved) == Method.of(config)
+  # a committed record's config, written before: "random", the same config as written now
+  record = config_lib.load(ROOT / "docs/results/paper/transfer-synergies-set1-seed0/config.json")
+  config_lib.save(record, tmp_path / "again.json")
+  assert config_lib.load(tmp_path / "again.json") == record
+  assert config_lib.same_run(config_lib.load(tmp_path / "again.json"), record)
+  # a start at decoder_from with none given: refused in one line naming the file
+  path.write_text(json.dumps({**saved, "decoder_from": ""}))
+  with pytest.raises(ValueError, match=r"config file .*config.json: decoder_init is decoder_from, "
+                                       r"but no decoder_from is given"):
+    config_lib.load(path)
+  assert cli.main(["eval", str(tmp_path)]) == 2
+  assert "decoder_init is decoder_from, but no decoder_from is given" in capsys.readouterr().err

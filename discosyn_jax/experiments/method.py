@@ -24,7 +24,7 @@ import dataclasses
 import re
 from typing import Any
 
-from discosyn_jax.config import OLD_STARTS
+from discosyn_jax.config import GIVEN_START, OLD_STARTS
 from discosyn_jax.experiments.presets import DECAY  # the decayed update's row (rank)
 
 FAMILIES = ("PPO", "PCA", "AE", "DiscoSyn", "Random", "Prior")
@@ -172,7 +172,7 @@ class Method:
     if get("method"):  # a fitted space: PCA, AE
       return cls(get("method"), get("n_synergies"))
     init = get("decoder_init", "random") or "random"
-    init = OLD_STARTS.get(init, init)
+    init = "random" if init == GIVEN_START else OLD_STARTS.get(init, init)
     family = "DiscoSyn"
     if get("freeze_decoder") and not get("decoder_from"):
       family = "Random" if init == "random" else "Prior"
