@@ -34,10 +34,12 @@ def cmd_demo(args) -> None:
   from discosyn_jax import tasks
   from discosyn_jax.env import rollouts
 
+  names = tasks.expand(args.tasks)
+  width = max(8, *(len(tasks.label(name)) for name in names))  # one's own task by its class
   print(f"random policy, {args.batch} envs x one episode per task; neutral: the zero action")
-  print(f"{'task':8s} {'backend':7s} {'obs':>4s} {'build s':>8s} {'compile s':>9s} {'env steps/s':>11s} "
+  print(f"{'task':{width}s} {'backend':7s} {'obs':>4s} {'build s':>8s} {'compile s':>9s} {'env steps/s':>11s} "
         f"{'return':>7s} {'success':>7s} {'diverged':>8s} {'neutral: return':>15s} {'success':>7s}")
-  for name in tasks.expand(args.tasks):
+  for name in names:
     start = time.perf_counter()
     env = tasks.make(name, backend=args.backend, hand=args.hand)
     built = time.perf_counter() - start
@@ -53,7 +55,7 @@ def cmd_demo(args) -> None:
     ret, success = states.reward.sum(0).mean(), states.metrics["success"][-1].mean()
     zero = lambda t, key, batch, env=env: jnp.zeros((batch, env.action_size))
     neutral = rollouts.run_episode(env, keys, zero)[1]
-    print(f"{name:8s} {env.backend:7s} {env.observation_size:4d} {built:8.2f} {compiled:9.2f} {rate:11,.0f} "
+    print(f"{tasks.label(name):{width}s} {env.backend:7s} {env.observation_size:4d} {built:8.2f} {compiled:9.2f} {rate:11,.0f} "
           f"{float(ret):7.2f} {float(success):7.1%} {int(states.metrics['diverged'].sum()):8d} "
           f"{float(neutral.reward.sum(0).mean()):15.2f} {float(neutral.metrics['success'][-1].mean()):7.1%}")
 

@@ -117,3 +117,20 @@ def test_the_own_task_set_is_solved_by_a_deliberate_motion_not_by_chance(cls, de
   chance = float(rollouts.run_episode(env, keys, uniform)[1].metrics["success"][-1].mean())
   done = float(rollouts.run_episode(env, keys[:8], _hold(env, **deliberate))[1].metrics["success"][-1].mean())
   assert chance <= 0.15 and done >= success and done > chance
+
+
+def test_a_task_given_by_its_path_keeps_the_printed_tables_columns(capsys):
+  """The evaluation table and the demo's name a task of one's own by its class: its path
+  would push the columns apart."""
+  from discosyn_jax.config import TrainConfig
+  from discosyn_jax.training import evaluation
+
+  spec = f"{EXAMPLE.parent / 'own_set' / 'own_set.py'}:Press"
+  results = {spec: {"success": 0.5, "return": 1.25}, "valve0": {"success": 1.0, "return": -3.5}}
+  _, *table = evaluation.format_table(results, 10, TrainConfig()).splitlines()
+  assert [line.split()[0] for line in table] == ["task", "Press", "valve0"]
+  assert len({len(line) for line in table}) == 1
+  assert cli.main(["demo", spec, "valve0", "--batch", "2", "--backend", "native"]) == 0
+  _, *table = capsys.readouterr().out.splitlines()
+  assert [line.split()[0] for line in table] == ["task", "Press", "valve0"]
+  assert len({len(line) for line in table}) == 1

@@ -234,3 +234,12 @@ def test_cli_resume_continues_with_the_runs_own_config(valve_run, tmp_path, caps
   out = capsys.readouterr().out
   assert "evaluation at step 5" in out and "valve1 " in out
   assert len((copy / "metrics.jsonl").read_text().splitlines()) == 5
+
+
+def test_the_compiled_steps_line_counts_one_task_as_a_task(tmp_path):
+  config = TrainConfig(tasks=("a",), steps=1, checkpoint_every=0, closing_episodes=0, **TINY)
+  logged = []
+  loop.train(Trainer(config, envs=[ReachAction(0.5)]), tmp_path / "run", progress=False,
+             log=logged.append)
+  (line,) = [l for l in logged if l.startswith("train step compiled in")]
+  assert line.endswith("; 20 env steps per train step (1 task x 4 envs x 5 steps)"), line

@@ -8,6 +8,8 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+from discosyn_jax.env.task import label
+
 
 def episodes(trainer, params, normalizers, key, task: int, episodes: int, keep_states: bool = False,
              at_step=None):
@@ -79,10 +81,12 @@ def rollouts(trainer, params, normalizers, key, episodes: int):
 def format_table(results: dict[str, dict[str, float]], step: int, config, episodes: int | None = None,
                  what: str = "") -> str:
   """The evaluation table that ends a run (`what`: "closing " for its closing evaluation) and
-  that `discosyn eval` prints."""
+  that `discosyn eval` prints; a task of one's own by its class (its path would push the
+  columns apart)."""
+  width = max(16, *(len(label(name)) for name in results))
   lines = [f"{what}evaluation at step {step} ({step * config.env_steps_per_train_step:,} env steps, "
            f"{episodes or config.eval_envs} deterministic episodes per task)",
-           f"{'task':16s} {'success':>8s} {'return':>9s}"]
+           f"{'task':{width}s} {'success':>8s} {'return':>9s}"]
   for name, r in results.items():
-    lines.append(f"{name:16s} {r['success']:8.1%} {r['return']:9.2f}")
+    lines.append(f"{label(name):{width}s} {r['success']:8.1%} {r['return']:9.2f}")
   return "\n".join(lines)

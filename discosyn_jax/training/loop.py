@@ -118,6 +118,10 @@ def train(trainer: Trainer, run_dir: pathlib.Path, *, resume: bool = False, forc
       raise
 
 
+def _count(n: int, noun: str) -> str:
+  return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
+
+
 def _same_config(wanted: TrainConfig, given: TrainConfig, run_dir: pathlib.Path) -> None:
   """The trainer must run the config the folder calls for (a resumed run's own)."""
   if wanted != given:
@@ -136,8 +140,8 @@ def _run(trainer: Trainer, run_dir: pathlib.Path, resume: bool, writer: owner.Wr
   train_step = trainer.train_step.lower(state).compile()
   compile_s = time.perf_counter() - start
   log(f"train step compiled in {compile_s:.1f} s; {config.env_steps_per_train_step:,} env steps "
-      f"per train step ({len(config.tasks)} tasks x {config.num_envs} envs x "
-      f"{config.unroll_length} steps)")
+      f"per train step ({_count(len(config.tasks), 'task')} x {_count(config.num_envs, 'env')} x "
+      f"{_count(config.unroll_length, 'step')})")
 
   def save(final: bool = False) -> None:
     at["checkpoint"] = checkpoints.save(run_dir, state, config.keep_checkpoints, final=final)
@@ -182,7 +186,7 @@ def _run(trainer: Trainer, run_dir: pathlib.Path, resume: bool, writer: owner.Wr
         _check_finite(own_values, metrics, step)
         if bar is not None:
           shown.update({n: metrics[f"{n}/success"] for n in config.tasks if f"{n}/success" in metrics})
-          bar.set_postfix_str(" ".join(f"{n}:{v:.0%}" for n, v in list(shown.items())[:6]),
+          bar.set_postfix_str(" ".join(f"{label(n)}:{v:.0%}" for n, v in list(shown.items())[:6]),
                               refresh=False)
           bar.update(1)
         if _evaluates_at(config, step):
