@@ -311,7 +311,7 @@ def cmd_upgrade(args) -> None:
     added = config_lib.upgrade(run_dir / layout.CONFIG_FILE)
     archived = run_dir / (layout.METRICS_FILE + logs.ARCHIVED)
     if archived.is_file():  # a record's metrics: to what a record keeps today
-      logs.archive(archived)
+      logs.archive(archived, config_lib.load(run_dir / layout.CONFIG_FILE).unroll_length)
     print(f"{run}: {'added ' + ', '.join(added) if added else 'up to date'}")
 
 

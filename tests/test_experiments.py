@@ -446,7 +446,8 @@ def test_a_folder_of_records_continues_and_reports_without_checkpoints(experimen
   with np.load(source / "z.npz") as z:
     assert set(z.files) == {"a", "b"} and z["a"].dtype == np.float16 and z["a"].shape[1] == 3
   archived = logs.read_jsonl(ppo / "metrics.jsonl.xz")  # the rows a record keeps, 5 digits
-  assert archived == logs.kept(logs.read_log(ppo / "metrics.jsonl", as_archived=True))
+  assert archived == logs.kept(logs.read_log(ppo / "metrics.jsonl", as_archived=True),
+                               record.saved_config(ppo).unroll_length)
   assert not (ppo / "decoder.npz").exists() and not (experiments / "pca4-set1-seed0" / "z.npz").exists()
   kept = tmp_path / "kept"
   messages = []

@@ -827,12 +827,14 @@ def test_a_config_file_missing_a_field_is_named_never_filled_in(unbroken, tmp_pa
   import lzma
 
   from discosyn_jax.run import logs
-  rows = [{"step": s, "loss": 0.5, "a/reward": s / 8} for s in range(1, 41)]
+  rows = [{"step": s, "loss": 0.5, "a/reward": s / 8, "a/first_reward_t": 2 if s > 9 else 5}
+          for s in range(1, 41)]  # paid from step 10 (5 control steps a rollout)
   (run_dir / "metrics.jsonl.xz").write_bytes(
       lzma.compress("".join(json.dumps(r) + "\n" for r in rows).encode()))
   assert cli.main(["upgrade", str(run_dir)]) == 0
   assert config_lib.load(run_dir / "config.json") == TOY.replace(**config_lib.ADDED)
-  assert logs.read_jsonl(run_dir / "metrics.jsonl.xz") == logs.kept(rows) != rows
+  assert logs.read_jsonl(run_dir / "metrics.jsonl.xz") == logs.kept(rows, 5) != rows
+  assert 10 in [r["step"] for r in logs.kept(rows, 5)]
 
 
 @pytest.mark.parametrize("how, fragment", [

@@ -58,7 +58,7 @@ def test_an_archived_log_reads_as_the_log_itself(toy_run, tmp_path):
   # a record's archive (`archive`): the rows a record keeps (all four here: the last ones),
   # without the loss diagnostics, fractions to 5 significant digits, counts and steps exact;
   # the log itself stays
-  archived = logs.read_jsonl(logs.archive(plain))
+  archived = logs.read_jsonl(logs.archive(plain, TOY.unroll_length))
   assert plain.is_file() and len(archived) == len(rows)
   for row, kept_row in zip(rows, archived):
     assert "loss" in row and set(kept_row) == set(row) - {"loss", "env_steps_per_s"} - {
@@ -72,23 +72,25 @@ def test_an_archived_log_reads_as_the_log_itself(toy_run, tmp_path):
         assert float(f"{kept_row[key]:.5g}") == kept_row[key]
   # read at the archive's precision, the log's kept rows and its archive are the same (the
   # report of a run and of its record agree to the digit)
-  assert logs.kept(logs.read_log(plain, as_archived=True)) == archived
+  assert logs.kept(logs.read_log(plain, as_archived=True), TOY.unroll_length) == archived
   assert logs.read_log(kept.with_name("none.jsonl"), as_archived=True) == []
   # thinning the archive again changes nothing
-  assert logs.read_jsonl(logs.archive(plain.with_name(plain.name + logs.ARCHIVED))) == archived
+  assert logs.read_jsonl(logs.archive(plain.with_name(plain.name + logs.ARCHIVED),
+                                      TOY.unroll_length)) == archived
 
 
 def test_a_record_keeps_an_even_sample_the_last_steps_and_each_first_reward():
   unroll = 20
   rows = [{"step": s, "env_steps": 40 * s, "a/reward": s / 7, "a/policy_loss": 0.5, "loss": 1.5,
            "a/first_reward_t": 9 if s == 37 else (3 if s > 37 else unroll),
-           "b/first_reward_t": unroll, "grad_norm/heads": 0.25} for s in range(1, 201)]
-  kept = logs.kept(rows)
-  steps = [r["step"] for r in kept]
-  assert steps == sorted(set(range(4, 185, logs.RECORD_EVERY)) | {37} | set(range(185, 201)))
+           "b/first_reward_t": 0 if s == 1 else unroll, "grad_norm/heads": 0.25}
+          for s in range(1, 201)]
+  kept = logs.kept(rows, unroll)
+  steps = [r["step"] for r in kept]  # b paid in the first step, a in the 37th
+  assert steps == sorted(set(range(4, 185, logs.RECORD_EVERY)) | {1, 37} | set(range(185, 201)))
   assert all(set(r) == {"step", "env_steps", "a/reward", "a/first_reward_t", "b/first_reward_t",
                         "grad_norm/heads"} for r in kept)
-  assert logs.kept(kept) == kept and logs.kept([]) == []
+  assert logs.kept(kept, unroll) == kept and logs.kept([], unroll) == []
   # an even sample: a mean over a window moves by less than a step's change
   window = [r["a/reward"] for r in rows if r["step"] <= 100]
   assert abs(np.mean([r["a/reward"] for r in kept if r["step"] <= 100]) - np.mean(window)) < 2 / 7

@@ -51,7 +51,7 @@ def write(run_dir: pathlib.Path, trainer, state) -> None:
   from discosyn_jax.synergies import fitting
 
   run_dir, config = pathlib.Path(run_dir), trainer.config
-  logs.archive(run_dir / layout.METRICS_FILE)
+  logs.archive(run_dir / layout.METRICS_FILE, config.unroll_length)
   if config.closing_episodes and not (run_dir / layout.CLOSING_FILE).is_file():
     from discosyn_jax.training import loop  # a run stopped between its end and its closing
 
@@ -64,9 +64,8 @@ def write(run_dir: pathlib.Path, trainer, state) -> None:
                decoder_init=meta["decoder_init"])
   if not config.freeze_decoder:
     z = {task: samples.astype(np.float16) for task, samples in z_samples(trainer, state).items()}
-    tmp = atomic.unique(run_dir / layout.Z_FILE, ".npz")  # written whole, then renamed
-    np.savez(tmp, **z)
-    tmp.replace(run_dir / layout.Z_FILE)
+    with atomic.replacing(run_dir / layout.Z_FILE, ".npz") as tmp:  # written whole, then renamed
+      np.savez(tmp, **z)
 
 
 def z_samples(trainer, state, episodes: int = Z_EPISODES,

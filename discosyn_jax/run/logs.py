@@ -83,30 +83,28 @@ def read_log(path: pathlib.Path, as_archived: bool = False) -> list[dict]:
   return []
 
 
-def archive(path: pathlib.Path) -> pathlib.Path:
+def archive(path: pathlib.Path, unroll_length: int) -> pathlib.Path:
   """Write `path`.xz beside the log at `path` (in one step: a kill leaves the old one or
   none): the rows a record keeps (`kept`), every fractional number to ARCHIVED_DIGITS
   significant digits (counts, steps and integral values exact); the log itself stays, the
   loop appends to it. `path` may be the archive itself (an older record, thinned again)."""
   path = pathlib.Path(path)
   target = path if path.suffix == ARCHIVED else path.with_name(path.name + ARCHIVED)
-  rows = kept(read_jsonl(path))
-  tmp = target.with_name(target.name + atomic.NEW)
-  with lzma.open(tmp, "wt", preset=9) as f:
+  rows = kept(read_jsonl(path), unroll_length)
+  with atomic.replacing(target) as tmp, lzma.open(tmp, "wt", preset=9) as f:
     for row in rows:
       f.write(json.dumps({key: _archived(value) for key, value in row.items()}) + "\n")
-  tmp.replace(target)
   return target
 
 
-def kept(rows: list[dict]) -> list[dict]:
-  """The rows and columns of a metrics log that its archive keeps (RECORD_EVERY); the same
-  rows again when given them (thinning an archive twice changes nothing)."""
-  first, found = rows[0] if rows else {}, set()
-  out = []
+def kept(rows: list[dict], unroll_length: int) -> list[dict]:
+  """The rows and columns of a metrics log that its archive keeps (RECORD_EVERY), of a run
+  of rollouts of `unroll_length` steps (a task's first_reward_t is that until it is paid);
+  the same rows again when given them (thinning an archive twice changes nothing)."""
+  found, out = set(), []
   for n, row in enumerate(rows):
     news = {key for key, value in row.items() if key.endswith("/first_reward_t")
-            and key not in found and value != first.get(key)}
+            and key not in found and value < unroll_length}
     found |= news
     if (row.get("step", n) % RECORD_EVERY == 0 or n >= len(rows) - RECORD_ENDS
         or news):
