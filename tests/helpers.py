@@ -70,3 +70,38 @@ def assert_one_step_learns(trainer, state):
   moved = jax.tree.leaves(jax.tree.map(lambda a, b: np.abs(np.asarray(a) - b).max(),
                                        state.params, before))
   assert max(moved) > 0
+
+
+# -- the code blocks of the pages a user follows (tests/test_doc_snippets.py, test_doc_commands.py)
+USER_PAGES = ("README.md", "docs/RESULTS.md", "docs/TAKE_HOME.md", "docs/YOUR_TASK.md",
+              "docs/YOUR_HAND.md")
+# the size of a documented run in a test: the `ci` scale's (seconds, nothing learned)
+TINY = dict(num_envs=4, unroll_length=5, num_minibatches=2, update_epochs=1, steps=2,
+            eval_every=1, eval_envs=2, closing_episodes=4, checkpoint_every=0)
+
+
+def doc_blocks(page: str) -> list[tuple[int, str, str, str | None]]:
+  """(line, language, code, why not run) of each fenced block of `page`; why not run: the
+  text of a `<!-- not run: ... -->` comment on the line above the fence, else None."""
+  import re
+
+  text = open(os.path.join(ROOT, page), encoding="utf-8").read()
+  found = []
+  for m in re.finditer(r"^```(\w*)\n(.*?)^```", text, re.M | re.S):
+    line = text.count("\n", 0, m.start()) + 1
+    above = text[:m.start()].rstrip("\n").rsplit("\n", 1)[-1]
+    why = re.fullmatch(r"<!-- not run: (.+) -->", above.strip())
+    found.append((line, m.group(1), m.group(2), why.group(1) if why else None))
+  return found
+
+
+def doc_folder(tmp_path):
+  """A folder to run a page's blocks in, as from the checkout's root: its examples, records,
+  hands and studies read in place, and whatever a block writes (runs/, pictures) kept here."""
+  for name in ("xml", "studies"):
+    (tmp_path / name).symlink_to(os.path.join(ROOT, name))
+  docs = tmp_path / "docs"
+  docs.mkdir()
+  for name in ("examples", "results"):
+    (docs / name).symlink_to(os.path.join(ROOT, "docs", name))
+  return tmp_path
