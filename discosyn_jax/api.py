@@ -68,17 +68,3 @@ def read_run(path: str | pathlib.Path):
   from discosyn_jax.run import folder
 
   return folder.read(path)
-
-
-def __getattr__(name: str):
-  # `discosyn_jax.api.Run` moved to the one Run type of a run folder (run/folder.py); the old
-  # path works for one release, with a warning naming the new one
-  if name == "Run":
-    import warnings
-
-    from discosyn_jax.run import folder
-
-    warnings.warn("discosyn_jax.api.Run has moved to discosyn_jax.run.folder.Run (ds.Run); the old "
-                  "path goes in the next release", FutureWarning, stacklevel=2)
-    return folder.Run
-  raise AttributeError(f"module 'discosyn_jax.api' has no attribute {name!r}")

@@ -445,17 +445,3 @@ def field_docs() -> dict[str, str]:
       docs[name] = " ".join(above + beside)
     above = []
   return docs
-
-
-def __getattr__(name: str):
-  # the env's settings lived here until 2026-12-06 (now discosyn_jax/env/settings.py); the old
-  # names work for one release, with a warning naming the new place
-  if name in ("BACKENDS", "CONTROL_DT"):
-    import warnings
-
-    from discosyn_jax.env import settings
-
-    warnings.warn(f"discosyn_jax.config.{name} has moved to discosyn_jax.env.settings.{name}; the "
-                  "old name goes in the next release", FutureWarning, stacklevel=2)
-    return getattr(settings, name)
-  raise AttributeError(f"module 'discosyn_jax.config' has no attribute {name!r}")

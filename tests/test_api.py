@@ -51,20 +51,6 @@ def test_a_users_own_tasks_and_experiments_do_not_shadow_the_package(tmp_path):
   assert "valve3" in out.stdout and "weight_pull" in out.stdout
 
 
-def test_a_moved_import_path_still_works_with_one_warning_naming_the_new_one():
-  import importlib
-
-  for old, new in (("discosyn_jax.task", "discosyn_jax.env.task"),
-                   ("discosyn_jax.training.train", "discosyn_jax.training.trainer")):
-    sys.modules.pop(old, None)
-    with pytest.warns(FutureWarning, match=f"{old} has moved to {new}"):
-      module = importlib.import_module(old)
-    assert module is importlib.import_module(new)
-  from discosyn_jax.task import Task  # noqa: F401  (the form an older task file used)
-
-  assert Task is ds.Task
-
-
 def test_train_evaluate_and_read_a_run_through_the_api(tmp_path):
   config = ds.TrainConfig(tasks=("planted0",), decoder_init="random", num_envs=8,
                           unroll_length=5, num_minibatches=2, update_epochs=1, steps=4,

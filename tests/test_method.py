@@ -3,7 +3,6 @@ out of order is refused, a config names its method, and the report orders rows b
 
 import json
 import pathlib
-import warnings
 
 import pytest
 
@@ -39,7 +38,6 @@ def test_a_name_reads_as_its_parts():
   m = Method.parse("DiscoSyn3-L-reward-res0.3r150 frozen-res1r150")
   assert (m.family, m.synergies, m.decoder, m.start, m.reuse) == ("DiscoSyn", 3, "L", "reward", "frozen")
   assert m.residual == Residual(0.3, 150) and m.acting_residual == Residual(1.0, 150)
-  assert m.frozen and m.frozen_residual == m.acting_residual  # the names before, one release
   m = Method.parse("Random3-L-matched-wd8a200")
   assert (m.family, m.control, m.decay, m.decay_steps) == ("Random", "matched", 8.0, 200)
   assert Method.parse("DiscoSyn3-L-alpha3=0.1").tag == ("alpha3=0.1",)
@@ -95,24 +93,3 @@ def test_the_report_orders_rows_by_rank():
   # the paper's row of today's default start, and of nothing else
   assert report.paper_row(Method.parse("DiscoSyn3-L-reward")) == "DiscoSyn3-L"
   assert report.paper_row(Method.parse("DiscoSyn3-L-reward-res0.3r150")) == "DiscoSyn3-L-reward-res0.3r150"
-
-
-def test_the_old_path_of_run_still_imports_with_a_warning():
-  from discosyn_jax import api
-  from discosyn_jax.run import folder
-
-  with warnings.catch_warnings(record=True) as caught:
-    warnings.simplefilter("always")
-    assert api.Run is folder.Run
-  assert any(issubclass(w.category, FutureWarning) and "run.folder" in str(w.message) for w in caught)
-
-
-def test_the_env_settings_old_names_still_import_with_a_warning():
-  from discosyn_jax import config
-  from discosyn_jax.env import settings
-
-  for name in ("BACKENDS", "CONTROL_DT"):
-    with pytest.warns(FutureWarning, match=f"env.settings.{name}"):
-      assert getattr(config, name) == getattr(settings, name)
-  with pytest.raises(AttributeError):
-    config.NOT_A_SETTING

@@ -102,14 +102,6 @@ class Method:
       name += f" {self.reuse}" + (self.acting_residual.name if self.acting_residual else "")
     return name
 
-  @property
-  def frozen(self) -> bool:  # the name before `reuse` (frozen | tuned), kept for one release
-    return self.reuse == "frozen"
-
-  @property
-  def frozen_residual(self) -> Residual | None:  # now `acting_residual`, kept for one release
-    return self.acting_residual
-
   def __str__(self) -> str:
     return self.name
 
