@@ -246,3 +246,25 @@ def test_the_task_alone_study_learns_on_from_a_set2_decoder_copied_beside_its_ru
   with pytest.raises(SystemExit) as stop:
     alone.main(["--seeds", "--sources", str(tmp_path / "nothing"), "--out", str(tmp_path)])
   assert stop.value.code == 2
+
+
+def test_the_paper_budget_study_reads_success_and_drift_at_each_budget(capsys):
+  """At 1x a `cpu` run's budget is its whole run: its final per task is the record's final
+  (the mean of its last 3 evaluations), and it is solved first where every task's mean of
+  3 is at 0.8."""
+  from discosyn_jax.experiments import report_runs
+
+  budget = study("paper_budget")
+  run = report_runs.find([ROOT / "docs/results/paper/discosyn3-l-reward-set1-seed0"])[0][0]
+  final = budget.final_at(run, budget.cpu_steps("set1"))
+  assert final == pytest.approx({t: run.final[f"{t}/success"] for t in run.config.tasks})
+  first = budget.first_solved(run)
+  at = next(r["step"] for r in run.evaluations if r["env_steps"] == first)
+  assert min(budget.final_at(run, at).values()) >= 0.8
+  assert all(min(budget.final_at(run, r["step"]).values()) < 0.8
+             for r in run.evaluations if r["step"] < at)
+  assert 0 < budget.drift_at(run, 300)["decoder/overlap_start"] <= 1
+  budget.main([str(run.path)])
+  out = capsys.readouterr().out
+  assert "| discosyn3-l-reward-set1-seed0 | 1x | 1.54 M |" in out and "2x" not in out
+  assert budget.reference_overlap(run, ROOT / "docs/results/paper") == pytest.approx(1.0, abs=1e-5)
