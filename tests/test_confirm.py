@@ -418,3 +418,36 @@ def test_the_schedule_is_a_share_of_the_run_and_means_the_same_at_every_scale(tm
   assert any("share of steps" in m for m in config_lib.mismatches(upgraded, upgraded.replace(steps=2400)))
   plain = presets.preset("set2-disco6-linear")
   assert config_lib.mismatches(plain, plain.replace(steps=2400)) == []
+
+
+def test_a_plan_damaged_at_random_is_read_or_refused_in_one_line(tmp_path):
+  """Bits flipped and cuts at random points of a committed plan: each either reads as a plan
+  (a flip in its prose, or a digit that still makes one) that is runnable or refused as such,
+  or is refused in one line naming the file; never another exception."""
+  import random
+
+  good = (pathlib.Path(ROOT) / "docs/results/confirm-own-synergies-transfer/plan.json").read_bytes()
+  rng = random.Random(0)
+  outcomes = {"read": 0, "refused": 0}
+  for trial in range(60):
+    data = bytearray(good)
+    if trial % 2:
+      data = data[: rng.randrange(len(data))]
+    else:
+      for _ in range(rng.randint(1, 4)):
+        data[rng.randrange(len(data))] ^= 1 << rng.randrange(8)
+    path = tmp_path / f"t{trial}" / confirm.PLAN_FILE
+    path.parent.mkdir()
+    path.write_bytes(bytes(data))
+    try:
+      plan = confirm.load(path)
+    except ValueError as err:
+      assert "\n" not in str(err) and str(path) in str(err), err
+      outcomes["refused"] += 1
+      continue
+    try:
+      confirm.check_runnable(plan)
+    except ValueError as err:  # a plan of a task or hand that is not there: its field named
+      assert "\n" not in str(err), err
+    outcomes["read"] += 1
+  assert outcomes["refused"] >= 30 and outcomes["read"] > 0  # every cut short is refused
