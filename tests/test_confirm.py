@@ -441,13 +441,13 @@ def test_a_plan_damaged_at_random_is_read_or_refused_in_one_line(tmp_path):
     path.write_bytes(bytes(data))
     try:
       plan = confirm.load(path)
-    except ValueError as err:
+    except confirm.PlanError as err:
       assert "\n" not in str(err) and str(path) in str(err), err
       outcomes["refused"] += 1
       continue
     try:
       confirm.check_runnable(plan)
-    except ValueError as err:  # a plan of a task or hand that is not there: its field named
+    except confirm.PlanError as err:  # a plan of a task or hand that is not there: its field named
       assert "\n" not in str(err), err
     outcomes["read"] += 1
   assert outcomes["refused"] >= 30 and outcomes["read"] > 0  # every cut short is refused

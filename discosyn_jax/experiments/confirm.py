@@ -55,6 +55,12 @@ from discosyn_jax.config import TrainConfig
 from discosyn_jax.experiments import intervals
 
 PLAN_FILE = "plan.json"  # the plan, copied into the folder of its runs
+
+
+class PlanError(ValueError):
+  """A plan, or the runs it is judged on, that cannot be run or judged: the line names the
+  file or the row and field (the CLI prints it alone, exit 2)."""
+
 SCORES = ("final", "curve", "closing")
 STATISTICS = ("P", "difference")
 EXPECTATIONS = {"above": {"above"}, "below": {"below"}, "level": {"level"},
@@ -119,62 +125,62 @@ class Plan:
 
 
 def load(path) -> Plan:
-  """The checked plan in the file at `path`; ValueError naming the file and what is wrong."""
+  """The checked plan in the file at `path`; PlanError naming the file and what is wrong."""
   path = pathlib.Path(path)
   try:
     values = json.loads(path.read_text())
   except FileNotFoundError:
-    raise ValueError(f"no plan file {path}") from None
+    raise PlanError(f"no plan file {path}") from None
   except (json.JSONDecodeError, UnicodeDecodeError) as err:
-    raise ValueError(f"plan {path}: not JSON ({err})") from None
+    raise PlanError(f"plan {path}: not JSON ({err})") from None
   try:
     plan = dataclasses.replace(parse(values), base=path.parent)
   except (KeyError, TypeError, ValueError) as err:
     what = f"no {err}" if isinstance(err, KeyError) else str(err)
-    raise ValueError(f"plan {path}: {what}") from None
+    raise PlanError(f"plan {path}: {what}") from None
   check_records(plan)
   return plan
 
 
 def parse(values: dict[str, Any]) -> Plan:
   if not isinstance(values, dict):
-    raise ValueError("not a JSON object")
+    raise PlanError("not a JSON object")
   known = {"name", "claim", "final_k", "level_margin", "rows", "hypotheses", "decision"}
   unknown = sorted(set(values) - known)
   if unknown:
-    raise ValueError(f"unknown field(s) {', '.join(unknown)}")
+    raise PlanError(f"unknown field(s) {', '.join(unknown)}")
   for field in ("rows", "hypotheses"):
     if not isinstance(values[field], list) or not values[field]:
-      raise ValueError(f"{field} must be a non-empty list, not {_shown(values[field])}")
+      raise PlanError(f"{field} must be a non-empty list, not {_shown(values[field])}")
   rows = tuple(_row(r, i) for i, r in enumerate(values["rows"]))
   names = [r.name for r in rows]
   if len(set(names)) != len(names):
-    raise ValueError("rows must be given, each name once")
+    raise PlanError("rows must be given, each name once")
   hypotheses = tuple(_hypothesis(h, i) for i, h in enumerate(values["hypotheses"]))
   for h in hypotheses:
     for name in (h.x, h.y):
       if name not in names:
-        raise ValueError(f"hypothesis {h.text}: no row {name!r}")
+        raise PlanError(f"hypothesis {h.text}: no row {name!r}")
     if h.score not in SCORES:
-      raise ValueError(f"hypothesis {h.text}: score is one of {', '.join(SCORES)}")
+      raise PlanError(f"hypothesis {h.text}: score is one of {', '.join(SCORES)}")
     if h.expect not in EXPECTATIONS:
-      raise ValueError(f"hypothesis {h.text}: expect is one of {', '.join(EXPECTATIONS)}")
+      raise PlanError(f"hypothesis {h.text}: expect is one of {', '.join(EXPECTATIONS)}")
     if h.statistic not in STATISTICS:
-      raise ValueError(f"hypothesis {h.text}: statistic is one of {', '.join(STATISTICS)}")
+      raise PlanError(f"hypothesis {h.text}: statistic is one of {', '.join(STATISTICS)}")
     shared = set(_row_by(rows, h.x).config.tasks) & set(_row_by(rows, h.y).config.tasks)
     if not shared:
-      raise ValueError(f"hypothesis {h.text}: the two rows share no task ({h.x}: "
+      raise PlanError(f"hypothesis {h.text}: the two rows share no task ({h.x}: "
                        f"{', '.join(_row_by(rows, h.x).config.tasks)}; {h.y}: "
                        f"{', '.join(_row_by(rows, h.y).config.tasks)})")
     if h.task and h.task not in shared:
-      raise ValueError(f"hypothesis {h.text}: task {h.task!r} is not one both rows train")
+      raise PlanError(f"hypothesis {h.text}: task {h.task!r} is not one both rows train")
     if h.x == h.y:
-      raise ValueError(f"hypothesis {h.text}: compares a row with itself")
+      raise PlanError(f"hypothesis {h.text}: compares a row with itself")
   final_k, margin = values["final_k"], values["level_margin"]
   if not isinstance(final_k, int) or final_k < 1:
-    raise ValueError(f"final_k must be a whole number >= 1, not {final_k!r}")
+    raise PlanError(f"final_k must be a whole number >= 1, not {final_k!r}")
   if not isinstance(margin, (int, float)) or not 0 <= margin < 0.5:
-    raise ValueError(f"level_margin must be in [0, 0.5), not {margin!r}")
+    raise PlanError(f"level_margin must be in [0, 0.5), not {margin!r}")
   return Plan(str(values["name"]), str(values["claim"]), final_k, float(margin), rows,
               hypotheses, str(values["decision"]), values)
 
@@ -194,51 +200,51 @@ MAX_NAME = 100  # a row's name is a folder's name: short, printable
 
 def _hypothesis(values, index: int) -> Hypothesis:
   if not isinstance(values, dict):
-    raise ValueError(f"hypotheses[{index}] must be an object (x, y, score, expect), not "
+    raise PlanError(f"hypotheses[{index}] must be an object (x, y, score, expect), not "
                      f"{_shown(values)}")
   fields = {f.name for f in dataclasses.fields(Hypothesis)}
   unknown, missing = sorted(set(values) - fields), [k for k in ("x", "y", "score", "expect")
                                                      if k not in values]
   if unknown or missing:
-    raise ValueError(f"hypotheses[{index}]: " + (f"unknown field(s) {', '.join(unknown)}" if unknown
+    raise PlanError(f"hypotheses[{index}]: " + (f"unknown field(s) {', '.join(unknown)}" if unknown
                                                  else f"no {missing[0]}"))
   bad = [k for k, v in values.items() if not isinstance(v, str)]
   if bad:
-    raise ValueError(f"hypotheses[{index}]: {bad[0]} must be a string, not {_shown(values[bad[0]])}")
+    raise PlanError(f"hypotheses[{index}]: {bad[0]} must be a string, not {_shown(values[bad[0]])}")
   return Hypothesis(**values)
 
 
 def _row(values, index: int = 0) -> Row:
   if not isinstance(values, dict):
-    raise ValueError(f"rows[{index}] must be an object (name, seeds, config), not {_shown(values)}")
+    raise PlanError(f"rows[{index}] must be an object (name, seeds, config), not {_shown(values)}")
   name, seeds, fields = values["name"], values["seeds"], values["config"]
   if (not isinstance(name, str) or not name or "/" in name or len(name) > MAX_NAME
       or not name.isprintable() or name in (".", "..")):
-    raise ValueError(f"rows[{index}]: a row's name is a folder's name (printable, no '/', at most "
+    raise PlanError(f"rows[{index}]: a row's name is a folder's name (printable, no '/', at most "
                      f"{MAX_NAME} characters), not {_shown(name)}")
   if (not isinstance(seeds, list) or not seeds or len(set(map(str, seeds))) != len(seeds)
       or not all(isinstance(s, int) and not isinstance(s, bool) for s in seeds)):
-    raise ValueError(f"row {name}: seeds must be a list of distinct whole numbers, not {_shown(seeds)}")
+    raise PlanError(f"row {name}: seeds must be a list of distinct whole numbers, not {_shown(seeds)}")
   for seed in seeds:
     try:
       checks.seed(seed)
     except ValueError as err:
-      raise ValueError(f"row {name}: {err}") from None
+      raise PlanError(f"row {name}: {err}") from None
   if not isinstance(fields, dict):
-    raise ValueError(f"row {name}: config must be an object of TrainConfig fields, not {_shown(fields)}")
+    raise PlanError(f"row {name}: config must be an object of TrainConfig fields, not {_shown(fields)}")
   if "seed" in fields:
-    raise ValueError(f"row {name}: its config gives no seed (the row's seeds do)")
+    raise PlanError(f"row {name}: its config gives no seed (the row's seeds do)")
   records = values.get("records", [])
   unknown = sorted(set(values) - {"name", "seeds", "config", "records"})
   if unknown:
-    raise ValueError(f"row {name}: unknown field(s) {', '.join(unknown)}")
+    raise PlanError(f"row {name}: unknown field(s) {', '.join(unknown)}")
   if records and (len(records) != len(seeds) or not all(isinstance(r, str) and r for r in records)):
-    raise ValueError(f"row {name}: records must be one folder per seed ({len(seeds)})")
+    raise PlanError(f"row {name}: records must be one folder per seed ({len(seeds)})")
   try:
     # a plan written before a field was added ran with that field's value of then
     config = TrainConfig.from_dict(config_lib.with_added({**fields, "seed": seeds[0]})[0]).validate()
   except (TypeError, ValueError) as err:
-    raise ValueError(f"row {name}: {err}") from None
+    raise PlanError(f"row {name}: {err}") from None
   return Row(name, tuple(seeds), config, tuple(records))
 
 
@@ -259,10 +265,10 @@ def check_records(plan: Plan) -> None:
       path = plan.record(row, seed)
       config_file = path / "config.json"
       if not config_file.is_file():
-        raise ValueError(f"row {row.name}: no record of seed {seed} at {path}")
+        raise PlanError(f"row {row.name}: no record of seed {seed} at {path}")
       differs = _differs(config_lib.load(config_file), row.run_config(seed), "the row's")
       if differs:
-        raise ValueError(f"row {row.name}: {path} is not the run of the row's config: {differs}")
+        raise PlanError(f"row {row.name}: {path} is not the run of the row's config: {differs}")
 
 
 def row_fields(config: TrainConfig) -> dict[str, Any]:
@@ -297,24 +303,24 @@ def check_folder(plan: Plan, out: pathlib.Path) -> None:
   """Refuse a folder that holds another plan, or a run whose config is not the plan's."""
   out = pathlib.Path(out)
   if out.exists() and not out.is_dir():
-    raise ValueError(f"{out} is not a folder: the plan's runs go in a folder")
+    raise PlanError(f"{out} is not a folder: the plan's runs go in a folder")
   held = out / PLAN_FILE
   if held.exists() and not held.is_file():
-    raise ValueError(f"{held} is not a file: the folder's plan file is in the way")
+    raise PlanError(f"{held} is not a file: the folder's plan file is in the way")
   if held.is_file():
     try:
       same = json.loads(held.read_text()) == plan.source
     except (json.JSONDecodeError, UnicodeDecodeError):
       same = False
     if not same:
-      raise ValueError(f"{out} holds the runs of another plan ({held} differs from this one)")
+      raise PlanError(f"{out} holds the runs of another plan ({held} differs from this one)")
   for row in plan.rows:
     for seed in () if row.records else row.seeds:
       config_file = out / row.folder(seed) / "config.json"
       if config_file.is_file():
         differs = _differs(config_lib.load(config_file), row.run_config(seed), "the plan's")
         if differs:
-          raise ValueError(f"{config_file.parent} is not the plan's run: {differs}")
+          raise PlanError(f"{config_file.parent} is not the plan's run: {differs}")
 
 
 def check_runnable(plan: Plan) -> None:
@@ -331,9 +337,9 @@ def check_runnable(plan: Plan) -> None:
       tasks.expand(row.config.tasks)
       hands.load(row.config.hand)
       if row.config.decoder_from and not fitting.resolve(row.config.decoder_from).exists():
-        raise ValueError(f"decoder_from {row.config.decoder_from} does not exist")
+        raise PlanError(f"decoder_from {row.config.decoder_from} does not exist")
     except ValueError as err:
-      raise ValueError(f"row {row.name}: {err}") from None
+      raise PlanError(f"row {row.name}: {err}") from None
 
 
 def run(plan_path, out, *, progress: bool = False, log=print) -> list[pathlib.Path]:
@@ -403,7 +409,7 @@ def check_successes(run, tasks_) -> None:
       if value is None:
         continue  # a task this evaluation did not hold: scores() leaves the run out
       if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 <= value <= 1:
-        raise ValueError(f"{run.path}: {task}/success is {value!r} in {where}, not a success "
+        raise PlanError(f"{run.path}: {task}/success is {value!r} in {where}, not a success "
                          "in [0, 1]; the report refuses to judge on it")
 
 
