@@ -105,3 +105,14 @@ def doc_folder(tmp_path):
   for name in ("examples", "results"):
     (docs / name).symlink_to(os.path.join(ROOT, "docs", name))
   return tmp_path
+
+
+def damaged(good: bytes, trial: int, rng) -> bytes:
+  """`good` cut short at a random point (odd trials) or with 1-4 random bits flipped (even):
+  the fuzz of the files users hand us (synergy files, plans)."""
+  data = bytearray(good)
+  if trial % 2:
+    return bytes(data[: rng.randrange(len(data))])
+  for _ in range(rng.randint(1, 4)):
+    data[rng.randrange(len(data))] ^= 1 << rng.randrange(8)
+  return bytes(data)

@@ -16,6 +16,7 @@ from discosyn_jax.experiments.method import Method
 from discosyn_jax.run import folder, layout
 from discosyn_jax.training import loop
 from discosyn_jax.training.trainer import Trainer
+from tests import helpers
 from tests.helpers import ROOT
 from tests.toy_env import ReachAction
 
@@ -430,15 +431,9 @@ def test_a_plan_damaged_at_random_is_read_or_refused_in_one_line(tmp_path):
   rng = random.Random(0)
   outcomes = {"read": 0, "refused": 0}
   for trial in range(60):
-    data = bytearray(good)
-    if trial % 2:
-      data = data[: rng.randrange(len(data))]
-    else:
-      for _ in range(rng.randint(1, 4)):
-        data[rng.randrange(len(data))] ^= 1 << rng.randrange(8)
     path = tmp_path / f"t{trial}" / confirm.PLAN_FILE
     path.parent.mkdir()
-    path.write_bytes(bytes(data))
+    path.write_bytes(helpers.damaged(good, trial, rng))
     try:
       plan = confirm.load(path)
     except confirm.PlanError as err:
