@@ -42,8 +42,6 @@ __version__ = "0.1.0"
 from discosyn_jax import quiet_mjx as _quiet_mjx  # noqa: E402,F401
 
 
-
-
 def setup_jax() -> None:
   """MJX imported quietly, the persistent compile cache on, and `jax.device_put_replicated`
   given back where JAX removed it, for Brax's own trainers (run/jax_setup.py)."""

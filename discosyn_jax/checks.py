@@ -16,6 +16,11 @@ MAX_SEED = 2**32 - 2
 _PLURALS = {str: "strings", int: "whole numbers", float: "finite numbers", bool: "true/false values"}
 
 
+def shortened(text: str, limit: int = 40) -> str:
+  """A value's text as a one-line message names it: at most `limit` characters."""
+  return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
 def _kind_problem(kind, value) -> str | None:
   """What `value` should be to have the type `kind`, or None when it has it."""
   if kind is bool:

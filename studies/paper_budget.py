@@ -16,13 +16,12 @@ Reads logs and records only, no training; the runs: `discosyn experiment discosy
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import pathlib
-
-import numpy as np
 
 RESULTS = pathlib.Path(__file__).resolve().parents[1] / "docs/results"
 MULTIPLES = (1, 2, 4, 8, 16)
-SOLVED, LAST = 0.8, 3
+SOLVED = 0.8
 
 
 def cpu_steps(task_set: str) -> int:
@@ -31,17 +30,20 @@ def cpu_steps(task_set: str) -> int:
   return paper.SCALES["cpu"].train_for(task_set)["steps"]
 
 
+def upto(run, step: int):
+  """The run as it stood at train step `step`: its evaluations up to it."""
+  return dataclasses.replace(run, evaluations=[r for r in run.evaluations if r["step"] <= step])
+
+
 def final_at(run, step: int) -> dict[str, float] | None:
-  """Per task, the mean of the last LAST evaluations at or before train step `step`."""
-  rows = [r for r in run.evaluations if r["step"] <= step][-LAST:]
-  if not rows:
-    return None
-  return {t: float(np.mean([r[f"{t}/success"] for r in rows])) for t in run.config.tasks}
+  """Per task, the run's final success at train step `step` (Run.at_end: the mean of the
+  last 3 evaluations up to it)."""
+  end = upto(run, step).at_end()
+  return {t: end[f"{t}/success"] for t in run.config.tasks} if end else None
 
 
 def curve_at(run, step: int) -> float:
-  rows = [r for r in run.evaluations if r["step"] <= step]
-  return float(np.mean([r[f"{t}/success"] for r in rows for t in run.config.tasks]))
+  return upto(run, step).mean_success
 
 
 def drift_at(run, step: int) -> dict[str, float]:
@@ -50,7 +52,7 @@ def drift_at(run, step: int) -> dict[str, float]:
 
 
 def first_solved(run) -> int | None:
-  """Env steps of the first evaluation at which every task's last-LAST mean is >= SOLVED."""
+  """Env steps of the first evaluation at which every task's final (`final_at`) is >= SOLVED."""
   for row in run.evaluations:
     final = final_at(run, row["step"])
     if final and min(final.values()) >= SOLVED:

@@ -191,8 +191,7 @@ def _row_by(rows, name: str) -> Row:
 
 def _shown(value) -> str:
   """A value as a message names it: short, one line."""
-  text = json.dumps(value) if not isinstance(value, str) else repr(value)
-  return text if len(text) <= 40 else text[:37] + "..."
+  return checks.shortened(json.dumps(value) if not isinstance(value, str) else repr(value))
 
 
 MAX_NAME = 100  # a row's name is a folder's name: short, printable

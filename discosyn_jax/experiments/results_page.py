@@ -172,13 +172,19 @@ def difference(x, y, task_names, score: str) -> intervals.Estimate:
                                    {score: matrix(y, task_names, score)})[score]
 
 
+def at_seeds(compute) -> list:
+  """`compute()` bootstrapped from each seed of BOOTSTRAP_SEEDS, in their order."""
+  found = []
+  for seed in BOOTSTRAP_SEEDS:
+    with intervals.bootstrap_seed(seed):
+      found.append(compute())
+  return found
+
+
 def judged(x, y, task_names, score: str) -> tuple[intervals.Estimate, str]:
   """x - y (`difference`) at the bootstrap's seed, and its verdict at every seed of
   BOOTSTRAP_SEEDS (`stable`)."""
-  at = []
-  for seed in BOOTSTRAP_SEEDS:
-    with intervals.bootstrap_seed(seed):
-      at.append(difference(x, y, task_names, score))
+  at = at_seeds(lambda: difference(x, y, task_names, score))
   return at[0], stable([intervals.verdict(e, centre=0.0) for e in at])
 
 
@@ -323,10 +329,7 @@ def confirmation_table(records: Records) -> str:
     runs = list(records.folder(folder))
     if confirm.record_paths(plan):  # rows of committed records the plan names
       runs += report_runs.find(confirm.record_paths(plan), inside=True)[0]
-    at = []
-    for seed in BOOTSTRAP_SEEDS:
-      with intervals.bootstrap_seed(seed):
-        at.append(confirm.verdicts(plan, runs))
+    at = at_seeds(lambda: confirm.verdicts(plan, runs))
     found = at[0]
     for n, v in enumerate(found):
       h = v.hypothesis

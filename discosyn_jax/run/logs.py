@@ -24,9 +24,10 @@ ARCHIVED_DIGITS = 5
 
 # What an archive keeps of a run's metrics.jsonl (a record's metrics: what the reports,
 # figures and studies read, at a fifth of the size): every RECORD_EVERY-th train step (an
-# even sample: means over a window stay means), the last RECORD_ENDS (what the
-# tables' means over the last steps read), the row where a task's first reward shows; and not the update's loss diagnostics (none of
-# them is read from a record; the run's own log keeps them).
+# even sample: means over a window stay means), the last RECORD_ENDS (what the tables'
+# means over the last steps read), the row where a task's first reward shows; and not the
+# update's loss diagnostics (none of them is read from a record; the run's own log keeps
+# them).
 RECORD_EVERY, RECORD_ENDS = 4, 16
 _LEFT_OUT = frozenset({"approx_kl", "clip_fraction", "policy_loss", "value_loss", "loss",
                        "env_steps_per_s"})

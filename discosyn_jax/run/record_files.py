@@ -10,6 +10,8 @@ import math
 import pathlib
 from typing import Any
 
+from discosyn_jax import checks
+
 
 class RecordError(ValueError):
   """A run's file that does not hold what the run writes there: one line naming the file,
@@ -43,7 +45,7 @@ def read_object(path: pathlib.Path) -> dict[str, Any]:
 
 
 def _shown(value) -> str:
-  return repr(value) if len(repr(value)) <= 40 else repr(value)[:37] + "..."
+  return checks.shortened(repr(value))
 
 
 def _is_number(value) -> bool:

@@ -95,7 +95,7 @@ def run_curves(run_dir: pathlib.Path, out_dir: pathlib.Path) -> list[pathlib.Pat
   config, metrics, evals = read_run(run_dir)
   out_dir.mkdir(parents=True, exist_ok=True)
   name = run_dir.resolve().name
-  paths = [out_dir / name for name in CURVES]
+  paths = [out_dir / curve for curve in CURVES]
   _per_task_figure(config, metrics, evals, "success", paths[0], f"{name}: success")
   _per_task_figure(config, metrics, evals, "return", paths[1], f"{name}: return")
   _losses_figure(config, metrics, paths[2], f"{name}: losses")
