@@ -39,7 +39,7 @@ def _shipped_synergies() -> list[str]:
 
 
 def build_parser() -> argparse.ArgumentParser:
-  from discosyn_jax import config as config_lib
+  from discosyn_jax import config as config_lib, decoders
   from discosyn_jax.env import settings
   from discosyn_jax.experiments import presets  # TrainConfig only, no JAX
 
@@ -54,7 +54,7 @@ def build_parser() -> argparse.ArgumentParser:
     return f"default: the preset's; quickstart's is {value}"
 
   docs = config_lib.field_docs()  # each field's help, written once beside the field
-  choices = {"decoder": config_lib.DECODERS, "decoder_init": config_lib.DECODER_INITS,
+  choices = {"decoder": tuple(decoders.KINDS), "decoder_init": config_lib.DECODER_INITS,
              "discriminator_target": config_lib.DISCRIMINATOR_TARGETS,
              "backend": settings.BACKENDS,
              "physics": settings.PHYSICS}

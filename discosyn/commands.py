@@ -136,8 +136,6 @@ def train_config(args, base=None):
     if changes["decoder"] != frozen["decoder"] or changes["n_synergies"] != frozen["n_synergies"]:
       raise UsageError(f"--decoder-from {args.decoder_from} holds a {frozen['decoder']} decoder "
                        f"with {frozen['n_synergies']} synergies; drop --decoder / --synergies")
-  if "decoder_init" not in changes and {"decoder", "freeze_decoder", "decoder_from"} & set(changes):
-    changes["decoder_init"] = "auto"  # the start follows the decoder asked for (config.py)
   return base.replace(**changes).validate()
 
 
@@ -171,7 +169,7 @@ def next_commands(out: pathlib.Path, step, config, results) -> str:
   run = shlex.quote(str(out))
   best = max(config.tasks, key=lambda t: results[t]["success"])
   lines = ["next:"]
-  if config.decoder != "identity":
+  if not config.kind.full_action:
     lines.append(f"  discosyn synergies {run}                 # the hand along each synergy")
   lines += [f"  discosyn render {run} --task {best}    # a video of the policy on {best}",
             f"  discosyn eval {run}                      # evaluate the run again",

@@ -16,10 +16,9 @@ import pathlib
 import tokenize
 from typing import Any
 
-from discosyn_jax import atomic, checks
+from discosyn_jax import atomic, checks, decoders
 from discosyn_jax.env.settings import PHYSICS  # the env's choice a config names
 
-DECODERS = ("linear", "mlp", "identity")
 # the priors a linear decoder may start from (decoder_init): what the pushed actions are read
 # by, and how the tasks' metrics make one subspace (discosyn_jax/synergies/priors.py)
 PRIORS = {"objects": ("objects", "trace"), "reward": ("reward", "share")}
@@ -82,7 +81,7 @@ class TrainConfig:
   # what each task rewards, each task its share of the directions in turn; auto: reward for
   # a linear decoder learned from scratch, random for any other (the config holds the start
   # it resolved to, so a run's config.json names it; decoder_from there where the decoder
-  # is read from decoder_from)
+  # is read from decoder_from; `replace` resolves auto again for the decoder it is given)
   decoder_init: str = "auto"
   # the initial decoder: a run directory (its latest checkpoint's decoder) or a synergy file
   # written by discosyn_jax.synergies.fitting (PCA / autoencoder); "" starts from a random one
@@ -191,9 +190,12 @@ class TrainConfig:
   keep_checkpoints: int = 3  # periodic checkpoints kept besides `final`
 
   def __post_init__(self):
-    if self.decoder_init == "auto":  # resolved once: the config says the start it runs
-      learned_from_scratch = (self.decoder == "linear" and not self.decoder_from
-                              and not self.freeze_decoder)
+    # the config says the start it runs; one made with auto remembers it (not a field: two
+    # configs that run the same are equal), so that `replace` gives another decoder its own
+    object.__setattr__(self, "_auto_start", self.decoder_init == "auto")
+    if self.decoder_init == "auto":
+      learned_from_scratch = (self.decoder in decoders.KINDS and self.kind.linear
+                              and not self.decoder_from and not self.freeze_decoder)
       object.__setattr__(self, "decoder_init", "reward" if learned_from_scratch else "random")
 
   @property
@@ -205,6 +207,11 @@ class TrainConfig:
   def residual_ramp_step_count(self) -> int:
     """The train steps the residual's ramp lasts (residual_ramp of `steps`)."""
     return round(self.residual_ramp * self.steps)
+
+  @property
+  def kind(self) -> decoders.DecoderKind:
+    """What the decoder is (discosyn_jax/decoders.py)."""
+    return decoders.kind(self.decoder)
 
   @property
   def env_steps_per_train_step(self) -> int:
@@ -220,22 +227,21 @@ class TrainConfig:
       raise ValueError(f"a task is listed twice: {', '.join(self.tasks)}")
     if not self.hand:
       raise ValueError("no hand given")
-    if self.decoder not in DECODERS:
-      raise ValueError(f"unknown decoder {self.decoder!r}; known: {', '.join(DECODERS)}")
-    if self.decoder == "identity":
+    kind = decoders.kind(self.decoder)  # an unknown name fails here
+    if kind.full_action:
       if self.alpha2 or self.alpha3:
         raise ValueError("the identity decoder (full-action PPO) has no discriminator or decoder "
                          "noise: set alpha2 = alpha3 = 0")
     elif not 1 <= self.n_synergies <= 20:
       raise ValueError(f"the synergy count must be between 1 and 20, not {self.n_synergies}")
     if self.own_synergies:
-      if self.decoder == "identity":
+      if kind.full_action:
         raise ValueError("the identity decoder (full-action PPO) has no room for a task's own "
                          "synergies: its heads choose every action; set own_synergies = 0")
       if not 1 <= self.n_synergies + self.own_synergies <= 20:
         raise ValueError(f"shared plus own synergies must be at most 20, not "
                          f"{self.n_synergies} + {self.own_synergies}")
-    if self.task_posture and self.decoder == "identity":
+    if self.task_posture and kind.full_action:
       raise ValueError("the identity decoder (full-action PPO) has no room for a task posture: "
                        "its heads choose every action; set task_posture = false")
     if self.discriminator_target not in DISCRIMINATOR_TARGETS:
@@ -243,20 +249,20 @@ class TrainConfig:
                        f"{', '.join(DISCRIMINATOR_TARGETS)}")
     if self.decoder_init not in DECODER_INITS:
       raise ValueError(f"unknown decoder_init {self.decoder_init!r}; known: {', '.join(DECODER_INITS)}")
-    if self.decoder_init in PRIORS and (self.decoder != "linear" or self.decoder_from):
+    if self.decoder_init in PRIORS and (not kind.linear or self.decoder_from):
       raise ValueError(f"the {self.decoder_init} prior starts a linear decoder of its own: "
                        "decoder linear, no decoder_from")
-    if self.decoder_from and self.decoder == "identity":
+    if self.decoder_from and kind.full_action:
       raise ValueError("the identity decoder (full-action PPO) cannot take a decoder_from")
     if self.freeze_decoder and (self.decoder_weight_decay or self.decoder_weight_decay_steps):
       raise ValueError("a frozen decoder is not decayed: set decoder_weight_decay = 0 and "
                        "decoder_weight_decay_steps = 0")
     if self.decoder_weight_decay_steps and not self.decoder_weight_decay:
       raise ValueError("decoder_weight_decay_steps anneals a decoder_weight_decay: set one")
-    if self.bonus_cap and self.decoder == "identity":
+    if self.bonus_cap and kind.full_action:
       raise ValueError("the identity decoder (full-action PPO) has no discriminator bonus to cap: "
                        "set bonus_cap = false")
-    if self.task_noise and (self.decoder == "identity" or not self.decoder_noise):
+    if self.task_noise and (kind.full_action or not self.decoder_noise):
       raise ValueError("task_noise gives each task its own decoder noise: it needs a decoder "
                        "with noise (not identity, decoder_noise true)")
     if not self.decoder_noise and self.alpha3:
@@ -301,7 +307,7 @@ class TrainConfig:
     if not self.residual:
       if self.residual_ramp or self.residual_start:
         raise ValueError("residual_ramp and residual_start schedule a residual: set residual")
-    elif self.decoder == "identity":
+    elif self.kind.full_action:
       raise ValueError("the identity decoder (full-action PPO) has no room for a residual: its "
                        "heads choose every action; set residual = 0")
     elif not self.decoder_noise:
@@ -331,6 +337,10 @@ class TrainConfig:
     return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in values.items()})
 
   def replace(self, **changes) -> "TrainConfig":
+    """A copy with `changes`; a start resolved from auto is resolved again (a frozen or mlp
+    decoder starts at random), one given stays."""
+    if self._auto_start and "decoder_init" not in changes:
+      changes["decoder_init"] = "auto"
     return dataclasses.replace(self, **changes)
 
 

@@ -70,7 +70,7 @@ def window_rows(run, window: int) -> list[dict]:
 
 
 def entropy_per_dim(run, task: str, row: dict) -> float:
-  size = run.config.n_synergies if run.config.decoder != "identity" else run.action_size
+  size = run.action_size if run.config.kind.full_action else run.config.n_synergies
   return row[f"{task}/entropy_z"] / size
 
 

@@ -152,7 +152,7 @@ def print_reach(found: list, task: str) -> None:
   print("|---|---|---|---|")
   for method, run in in_order(found):
     file = run.path / "decoder.npz"
-    if run.config.decoder != "linear" or not file.is_file():
+    if not run.config.kind.linear or not file.is_file():
       continue
     reach = decoder_reach(dict(np.load(file)), direction)
     print(f"| {method} | {run.seed} | {reach:.2f} | {run.at_end()[f'{task}/success']:.2f} |")

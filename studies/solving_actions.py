@@ -27,6 +27,7 @@ import numpy as np
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from discosyn_jax import decoders  # noqa: E402
 from discosyn_jax.synergies import diagnostics, fitting, priors  # noqa: E402
 
 
@@ -44,7 +45,7 @@ def linear_spans(folder: pathlib.Path, task_set: str, seed: int) -> dict[str, np
       meta, params = fitting.read(run)
     except ValueError:  # a full-action run, or a folder that holds no decoder
       continue
-    if meta["decoder"] != "linear":
+    if not decoders.kind(meta["decoder"]).linear:
       continue
     info = json.loads((run / "experiment.json").read_text()) if (
         run / "experiment.json").is_file() else {}

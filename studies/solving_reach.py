@@ -44,7 +44,7 @@ def solving_actions(ppo_run: pathlib.Path, episodes: int = 16) -> dict[str, np.n
   from discosyn_jax.training import evaluation
 
   trainer, state = assemble.load(ppo_run)
-  if trainer.config.decoder != "identity":
+  if not trainer.config.kind.full_action:
     raise ValueError(f"{ppo_run} is not a full-action run")
   key = jax.random.PRNGKey(trainer.config.seed + 2)
   return fitting.applied_actions(evaluation.rollouts(trainer, state.params, state.normalizers,
@@ -80,7 +80,7 @@ def linear_runs(folders) -> list:
   from studies.finding_lag import runs
 
   return [r for r in runs(folders, "set2")
-          if r.config.decoder == "linear" and r.config.squash_z and not r.config.freeze_decoder
+          if r.config.kind.linear and r.config.squash_z and not r.config.freeze_decoder
           and (r.path / "decoder.npz").is_file()]
 
 

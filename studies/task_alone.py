@@ -41,7 +41,7 @@ def configs(task: str, seeds, steps: int | None = None, synergies: int | None = 
     row = plan.row(row_name)
     for seed in seeds:
       config = row.run_config(seed).replace(tasks=(task,))
-      if synergies and config.decoder != "identity":
+      if synergies and not config.kind.full_action:
         config = config.replace(n_synergies=synergies)
       yield _step(config, steps)
 

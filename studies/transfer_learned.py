@@ -101,7 +101,7 @@ def source_of(row: str, seed: int, given: pathlib.Path | None) -> pathlib.Path |
 
 def spans(folders) -> list[str]:
   """The --span table: per decoder, the share of each task's one-step reward metric."""
-  from discosyn_jax import config as config_lib
+  from discosyn_jax import config as config_lib, decoders
   from discosyn_jax.synergies import fitting, priors
   from discosyn_jax.tasks import registry
 
@@ -111,7 +111,7 @@ def spans(folders) -> list[str]:
   for folder in folders:
     for path in sorted(pathlib.Path(folder).glob("*/decoder.npz")):
       meta, params = fitting.read(path)
-      if meta["decoder"] == "linear":
+      if decoders.kind(meta["decoder"]).linear:
         rows[path.parent.name] = fitting.basis(meta, params)
   lines = ["| decoder | valve_cylinder | valve_cw |", "|---|---|---|"]
   for name, basis in rows.items():

@@ -29,12 +29,14 @@ posture of its own. One q over all tasks keeps that pressure, and needs no per-t
 from __future__ import annotations
 
 import math
+import sys
 from typing import Sequence
 
 import flax.linen as nn
 import jax
 import jax.numpy as jnp
 
+from discosyn_jax import decoders
 from discosyn_jax.config import TrainConfig
 
 LOG_2PI = math.log(2 * math.pi)
@@ -116,13 +118,8 @@ class DiscoSyn(nn.Module):
     self.heads = [GaussianHead(self.policy_hidden, b, self.init_z_std)
                   for _ in self.obs_sizes]
     self.values = [MLP(self.value_hidden, 1) for _ in self.obs_sizes]
-    if self.decoder == "linear":
-      self.synergy_decoder = LinearDecoder(self.action_size, self.decoder_bias, self.init_action_std)
-    elif self.decoder == "mlp":
-      self.synergy_decoder = GaussianHead(self.decoder_hidden, self.action_size,
-                                          self.init_action_std, out_scale=1.0)
-    elif self.decoder != "identity":
-      raise ValueError(f"unknown decoder {self.decoder!r}")
+    if not self.kind.full_action:  # the kind builds from this module's layers
+      self.synergy_decoder = self.kind.build(self, sys.modules[__name__])
     if self.has_discriminator:
       self.discriminator = GaussianHead(self.discriminator_hidden, b, 1.0, out_scale=1.0)
     if self.task_posture:
@@ -151,8 +148,12 @@ class DiscoSyn(nn.Module):
     return self.n_synergies + self.own_synergies
 
   @property
+  def kind(self) -> decoders.DecoderKind:
+    return decoders.kind(self.decoder)
+
+  @property
   def has_discriminator(self) -> bool:
-    return self.decoder != "identity"
+    return not self.kind.full_action
 
   def policy(self, task: int, obs):
     """(mean, log_std) of pi(z | s, task)."""
@@ -170,7 +171,7 @@ class DiscoSyn(nn.Module):
   def decode(self, z):
     """(mean, log_std) of p(a | z) for the shared part of z (its first b); log_std is None
     for a noiseless decoder (identity, or `decoder_noise` off)."""
-    if self.decoder == "identity":
+    if self.kind.full_action:
       return z, None
     mean, log_std = self.synergy_decoder(self.activation(z[..., :self.n_synergies]))
     return mean, log_std if self.decoder_noise else None
@@ -218,7 +219,7 @@ class DiscoSyn(nn.Module):
 
 def build(config, obs_sizes: Sequence[int], action_size: int) -> DiscoSyn:
   """The module a TrainConfig describes, for tasks with these observation sizes."""
-  b = action_size if config.decoder == "identity" else config.n_synergies
+  b = action_size if config.kind.full_action else config.n_synergies
   return DiscoSyn(
       obs_sizes=tuple(int(s) for s in obs_sizes), n_synergies=b, action_size=action_size,
       decoder=config.decoder, decoder_bias=config.decoder_bias, decoder_noise=config.decoder_noise,

@@ -500,7 +500,7 @@ def report_lines(plan: Plan, runs) -> list[str]:
 def dimensions(config: TrainConfig) -> tuple[str, str]:
   """(the action dimensions a task acts in, the directions there are in all): b + k and
   b + tasks x k with each task's own synergies; the full action for PPO."""
-  if config.decoder == "identity":
+  if config.kind.full_action:
     return f"{config.n_synergies} (the full action)", str(config.n_synergies)
   if not config.own_synergies:
     return str(config.n_synergies), str(config.n_synergies)

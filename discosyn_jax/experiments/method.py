@@ -24,11 +24,11 @@ import dataclasses
 import re
 from typing import Any
 
+from discosyn_jax import decoders
 from discosyn_jax.config import GIVEN_START, OLD_STARTS
 from discosyn_jax.experiments.presets import DECAY  # the decayed update's row (rank)
 
 FAMILIES = ("PPO", "PCA", "AE", "DiscoSyn", "Random", "Prior")
-DECODERS = {"linear": "L", "mlp": "NL"}
 STARTS = ("reward", "objects")  # a decoder's start as the name says it; random says nothing
 CONTROLS = ("matched", "zfree")
 REUSES = ("frozen", "tuned")  # how a space learned on some tasks is used on others
@@ -61,15 +61,21 @@ class Residual:
 
 _RESIDUAL = re.compile(r"res(?P<cap>\d+(?:\.\d+)?)(?:r(?P<ramp>\d+))?(?:s(?P<start>\d+))?")
 _DECAY = re.compile(r"wd(?P<decay>\d+(?:\.\d+)?)(?:a(?P<steps>\d+))?")
-_NAME = re.compile(r"(?P<family>" + "|".join(FAMILIES) + r")(?P<b>\d*)(?:\+(?P<own>\d+))?(?:-(?P<decoder>L|NL))?"
-                   r"(?P<parts>(?:-[^ ]+)?)(?: (?P<reuse>" + "|".join(REUSES) + r")(?P<acting>-\S+)?)?")
+
+
+def _name_pattern() -> re.Pattern:
+  """A method's name; its decoder part is any registered kind's letter (decoders.py)."""
+  letters = sorted((k.letter for k in decoders.learned()), key=len, reverse=True)
+  return re.compile(r"(?P<family>" + "|".join(FAMILIES) + r")(?P<b>\d*)(?:\+(?P<own>\d+))?"
+                    r"(?:-(?P<decoder>" + "|".join(map(re.escape, letters)) + r"))?"
+                    r"(?P<parts>(?:-[^ ]+)?)(?: (?P<reuse>" + "|".join(REUSES) + r")(?P<acting>-\S+)?)?")
 
 
 @dataclasses.dataclass(frozen=True)
 class Method:
   family: str
   synergies: int = 0  # b; 0 for PPO
-  decoder: str = ""  # "L", "NL"; "" for PPO and a fitted space
+  decoder: str = ""  # its kind's letter ("L", "NL"); "" for PPO and a fitted space
   control: str = ""  # "matched" or "zfree" (CONTROLS), "" for none
   start: str = ""  # the decoder's start (STARTS); "" for random
   decay: float = 0.0  # the decoder's weight decay, and the train steps it falls over
@@ -114,7 +120,7 @@ class Method:
   @classmethod
   def parse(cls, name: str) -> "Method":
     """The Method a name stands for; a name this release would not write is refused."""
-    match = _NAME.fullmatch(name)
+    match = _name_pattern().fullmatch(name)
     if not match:
       raise ValueError(f"{name!r} is not a method's name (e.g. PPO, PCA4, DiscoSyn3-L-reward, "
                        "Random3-L-zfree, DiscoSyn3-L-reward frozen)")
@@ -159,7 +165,8 @@ class Method:
       tag += ("tasknoise",)
     if get("bonus_cap"):  # each task's bonus capped at what it pays
       tag += ("bonuscap",)
-    if get("decoder") == "identity":
+    kind = decoders.kind(get("decoder"))
+    if kind.full_action:
       return cls("PPO", tag=tag)
     if get("method"):  # a fitted space: PCA, AE
       return cls(get("method"), get("n_synergies"))
@@ -169,7 +176,7 @@ class Method:
     if get("freeze_decoder") and not get("decoder_from"):
       family = "Random" if init == "random" else "Prior"
     decay = 0.0 if get("freeze_decoder") else (get("decoder_weight_decay", 0.0) or 0.0)
-    return cls(family, get("n_synergies"), DECODERS[get("decoder")], own=get("own_synergies", 0) or 0,
+    return cls(family, get("n_synergies"), kind.letter, own=get("own_synergies", 0) or 0,
                start="" if init == "random" else init, decay=decay,
                decay_steps=(get("decoder_weight_decay_steps", 0) or 0) if decay else 0,
                tag=tag, residual=Residual.of(source))
@@ -200,15 +207,16 @@ def _rows() -> dict[tuple, tuple[int, int]]:
   paper = ("", 0.0, 0)  # the paper's update: a random start, no decay
   updates = [(start, 0.0, 0) for start in STARTS] + [
       paper, ("", DECAY["decoder_weight_decay"], DECAY["decoder_weight_decay_steps"])]
+  linear, mlp = decoders.LINEAR.letter, decoders.MLP.letter
   rows = {}
   for slot, each in enumerate(updates):
-    rows[("DiscoSyn", "L", "", each)] = (slot, 0)
+    rows[("DiscoSyn", linear, "", each)] = (slot, 0)
     if each[0]:  # a prior's start frozen
-      rows[("Prior", "L", "", each)] = (slot, 1)
-    rows[("Random", "L", "matched", each)] = (slot, 2)
-  rows.update({("Random", "L", "", paper): (4, 0), ("Random", "L", "zfree", paper): (4, 1),
-               ("DiscoSyn", "NL", "", paper): (5, 0), ("Random", "NL", "", paper): (5, 1),
-               ("Random", "NL", "zfree", paper): (5, 2)})
+      rows[("Prior", linear, "", each)] = (slot, 1)
+    rows[("Random", linear, "matched", each)] = (slot, 2)
+  rows.update({("Random", linear, "", paper): (4, 0), ("Random", linear, "zfree", paper): (4, 1),
+               ("DiscoSyn", mlp, "", paper): (5, 0), ("Random", mlp, "", paper): (5, 1),
+               ("Random", mlp, "zfree", paper): (5, 2)})
   return rows
 
 

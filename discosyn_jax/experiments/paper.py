@@ -55,7 +55,7 @@ from typing import Any
 import jax
 import numpy as np
 
-from discosyn_jax import tasks
+from discosyn_jax import decoders, tasks
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import hands
 from discosyn_jax.run import layout
@@ -74,8 +74,9 @@ BASELINES = (("PCA", 4), ("AE", 4), ("PCA", 6), ("AE", 6))  # trained in, as in 
 FITTED_SIZES = (3, 4, 6)  # explained variance reported for these
 # each seed's default decoder (the preset's start: the reward prior): the same run, in the
 # same folder, as that set's DiscoSyn<b>-L-reward row
-TRANSFER_FROM = {"unseen-set1": ("set1", 3, "linear"), "unseen-set2": ("set2", 6, "linear"),
-                 "sparse": ("set1", 3, "linear")}
+_LINEAR, _MLP = decoders.LINEAR.name, decoders.MLP.name
+TRANSFER_FROM = {"unseen-set1": ("set1", 3, _LINEAR), "unseen-set2": ("set2", 6, _LINEAR),
+                 "sparse": ("set1", 3, _LINEAR)}
 # the rows of the paper's Tables I and II with today's defaults, what `all` runs of
 # discosyn-<set> and baselines-<set>: DiscoSyn from each set's default start (the paper's
 # DiscoSyn<b>-L is today's DiscoSyn<b>-L-reward), the controls it must beat (a random
@@ -226,7 +227,7 @@ class Fit:
 
 def fitted_meta(method: str, k: int, hidden: tuple[int, ...]) -> dict[str, Any]:
   """The meta of a fitted synergy file: the decoder it is, and the method that made it."""
-  return dict(decoder="linear" if method == "PCA" else "mlp", n_synergies=k, decoder_bias=True,
+  return dict(decoder=_LINEAR if method == "PCA" else _MLP, n_synergies=k, decoder_bias=True,
               decoder_hidden=hidden, method=method)
 
 
@@ -320,7 +321,7 @@ class Planner:
       prior = random.config.replace(decoder_init=learned.config.decoder_init).validate()
       method = Method.of(prior)
       steps.append(Train(self._folder(method, task_set), prior, meta(method)))
-    if learned.config.decoder == "linear":
+    if learned.config.kind.linear:
       # named after the learned run it copies: Random3-L-matched, Random3-L-matched-wd8a200
       method = learned.method.replace(family="Random", control="matched")
       match = Match(self._folder(f"{method}-decoder", task_set), learned.name, meta("fit"))
@@ -420,10 +421,10 @@ class Planner:
       # the decayed variant where it is measured to work (docs/notes/2026-12-02-a-planted-test-bed.md)
       # on the hand's sets both starts of the linear decoder, the paper's and the objects
       # prior's; on the test bed the paper's and the decayed variant (measured to work there)
-      kinds = ((("linear", ""), ("mlp", ""), ("linear", presets.DECAYED))
+      kinds = (((_LINEAR, ""), (_MLP, ""), (_LINEAR, presets.DECAYED))
                if task_set in presets.DECAYED_SETS else
-               (("linear", presets.PAPER), ("mlp", ""), ("linear", presets.OBJECTS_SUFFIX),
-                ("linear", presets.REWARDED), ("linear", presets.RESIDUAL_SUFFIX)))
+               ((_LINEAR, presets.PAPER), (_MLP, ""), (_LINEAR, presets.OBJECTS_SUFFIX),
+                (_LINEAR, presets.REWARDED), (_LINEAR, presets.RESIDUAL_SUFFIX)))
       runs = [self.discosyn(task_set, b, kind, variant) for b in DISCOSYN_SIZES[task_set]
               for kind, variant in kinds]
       steps = [step for run in runs for step in (run, *self.controls(run, task_set, experiment))]

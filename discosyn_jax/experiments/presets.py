@@ -11,6 +11,7 @@ random start) name each start on every set.
 
 from __future__ import annotations
 
+from discosyn_jax import decoders
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.tasks import TASK_SETS
 
@@ -58,13 +59,16 @@ PPO = dict(decoder="identity", n_synergies=20, alpha2=0.0, alpha3=0.0, init_z_st
            squash_z=False)
 # the paper's start, random, named where a preset keeps it (TrainConfig's own is the prior)
 RANDOM = dict(decoder_init="random")
+# TrainConfig's own start (the reward prior for a linear decoder learned from scratch), which
+# follows the decoder a `replace` gives: the default rows' (`quickstart`, `<set>-disco<b>-linear`)
+DEFAULT_START = dict(decoder_init="auto")
 
 PRESETS: dict[str, TrainConfig] = {
     # the README's main job: synergies (one shared linear decoder, b = 3, z bounded) on two
     # valves, 2-3 minutes on 2 idle cores (819 k env steps), long enough to turn them
     # (docs/notes/2026-11-29-b-quickstart.md: 3 seeds)
     "quickstart": TrainConfig(tasks=("valve2", "valve3"), n_synergies=3, decoder="linear",
-                              squash_z=True, **REWARD, num_envs=128, unroll_length=20, num_minibatches=8,
+                              squash_z=True, **DEFAULT_START, num_envs=128, unroll_length=20, num_minibatches=8,
                               update_epochs=4, steps=160, eval_every=20, eval_envs=32,
                               checkpoint_every=80),
     # independent full-action PPO on one valve (the paper's first baseline stage)
@@ -76,7 +80,7 @@ for _set, _sizes in (("set1", (3, 4)), ("set2", (4, 6))):
   _tasks = TASK_SETS[_set]
   PRESETS[f"{_set}-ppo"] = TrainConfig(tasks=_tasks, **PPO, **CPU_RUN)
   for _b in _sizes:
-    for _kind in ("linear", "mlp"):
+    for _kind in (decoders.LINEAR.name, decoders.MLP.name):
       # z bounded (squash_z): the decoder then has to learn its synergies; with z free a
       # random decoder did as well (docs/notes/2026-11-29-a-decoder-does-not-learn.md)
       PRESETS[f"{_set}-disco{_b}-{_kind}"] = TrainConfig(tasks=_tasks, n_synergies=_b,
@@ -87,7 +91,7 @@ for _set, _sizes in (("set1", (3, 4)), ("set2", (4, 6))):
     PRESETS[f"{_set}-disco{_b}-linear{OBJECTS_SUFFIX}"] = _paper.replace(**OBJECTS)
     PRESETS[f"{_set}-disco{_b}-linear{REWARDED}"] = _paper.replace(**REWARD)
     PRESETS[f"{_set}-disco{_b}-linear{DECAYED}"] = _paper.replace(**DECAY)
-    PRESETS[f"{_set}-disco{_b}-linear"] = _paper.replace(**REWARD)
+    PRESETS[f"{_set}-disco{_b}-linear"] = _paper.replace(**DEFAULT_START)
     PRESETS[f"{_set}-disco{_b}-linear{RESIDUAL_SUFFIX}"] = _paper.replace(**REWARD, **RESIDUAL)
     PRESETS[f"{_set}-disco{_b}-linear{LATE_SUFFIX}"] = _paper.replace(**REWARD, **RESIDUAL_LATE)
 
@@ -96,7 +100,7 @@ for _set, _sizes in (("set1", (3, 4)), ("set2", (4, 6))):
 # (planted_reach, planted_far: further)
 for _set in ("planted", "planted_slack", "planted_found", "planted_reach", "planted_far"):
   _tasks = TASK_SETS[_set]
-  for _kind in ("linear", "mlp"):
+  for _kind in (decoders.LINEAR.name, decoders.MLP.name):
     PRESETS[f"{_set}-disco3-{_kind}"] = TrainConfig(tasks=_tasks, n_synergies=3, decoder=_kind,
                                                    squash_z=True, **RANDOM, **PLANTED_RUN)
   PRESETS[f"{_set}-disco3-linear{DECAYED}"] = PRESETS[f"{_set}-disco3-linear"].replace(**DECAY)

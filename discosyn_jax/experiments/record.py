@@ -39,7 +39,7 @@ def files(config: TrainConfig) -> tuple[str, ...]:
            layout.METRICS_FILE + logs.ARCHIVED)
   if config.closing_episodes:  # runs made before the closing evaluation have none (0)
     names += (layout.CLOSING_FILE,)
-  if config.decoder != "identity":
+  if not config.kind.full_action:
     names += (layout.DECODER_FILE,) + (() if config.freeze_decoder else (layout.Z_FILE,))
   return names
 
@@ -56,7 +56,7 @@ def write(run_dir: pathlib.Path, trainer, state) -> None:
     from discosyn_jax.training import loop  # a run stopped between its end and its closing
 
     loop.write_closing(trainer, state, run_dir)
-  if config.decoder == "identity":
+  if config.kind.full_action:
     return
   decoder = jax.device_get(state.params["params"]["synergy_decoder"])
   meta = fitting.meta_of(config)  # its start too: it names the frozen rows it feeds

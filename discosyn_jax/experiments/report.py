@@ -230,7 +230,7 @@ def discovery_table(runs: list[Run]) -> str:
 
   lines = ["| method | set | learned, seed pairs | initial, seed pairs | each seed with its start "
            "| each seed with the planted span | chance |", "|---|---|---|---|---|---|---|"]
-  decoders = [r for r in runs if r.config.decoder != "identity"]
+  decoders = [r for r in runs if not r.config.kind.full_action]
   for task_set in sorted({r.task_set for r in decoders}):
     for method in order({r.method for r in decoders if r.task_set == task_set}):
       group = sorted((r for r in decoders if r.task_set == task_set and r.method == method),

@@ -71,7 +71,7 @@ def method_of(config: TrainConfig) -> Method:
   """The method a config runs, as the report names it where experiment.json is silent."""
   from discosyn_jax.synergies import fitting
 
-  if not config.decoder_from or config.decoder == "identity":
+  if not config.decoder_from or config.kind.full_action:
     return Method.of(config)
   # a space from elsewhere, named by its source, how it is used here (frozen, or learned on
   # with this run's own switches) and the residual it acts with here

@@ -65,7 +65,7 @@ def export(run_dir: str | pathlib.Path, path: str | pathlib.Path,
 
   run = folder.read(run_dir)
   config = run.config
-  if config.decoder == "identity":
+  if config.kind.full_action:
     raise SynergyFileError(f"{run.path} is a full-action run: it has no synergies to export")
   meta, params = fitting.read(run.path)
   if not run.evaluations:

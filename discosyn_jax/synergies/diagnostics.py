@@ -32,7 +32,7 @@ from discosyn_jax.agent.networks import DiscoSyn
 
 def synergy_basis(model: DiscoSyn, params) -> jax.Array:
   """The (action_size, b) basis of the decoder in `params` (the full param tree)."""
-  if model.decoder == "linear":
+  if model.kind.linear:
     return params["params"]["synergy_decoder"]["synergies"]["kernel"].T
   mean = lambda z: model.apply(params, z[None], method=DiscoSyn.decode)[0][0]
   return jax.jacfwd(mean)(jnp.zeros((model.n_synergies,)))

@@ -31,9 +31,11 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
+from discosyn_jax import decoders
 from discosyn_jax.agent import networks
 
 ARCHITECTURE = ("decoder", "n_synergies", "decoder_bias", "decoder_hidden", "squash_z")
+EVERY_KIND = ("decoder", "n_synergies", "squash_z")  # the rest a kind names (DecoderKind.fields)
 _DEFAULTS = {"squash_z": False}  # fields added since the first synergy files were written
 
 
@@ -250,7 +252,7 @@ def read(path: str | pathlib.Path) -> tuple[dict[str, Any], dict]:
     if kept.is_file() and not checkpoints.candidates(path):  # a record without checkpoints
       return read(kept)
     config, _, flat = reading.read_run(path, lambda c: checkpoints.read_arrays(c, _RUN_DECODER))
-    if config.decoder == "identity":
+    if config.kind.full_action:
       raise ValueError(f"{path} is a full-action run: it has no synergy decoder")
     meta = meta_of(config)
   elif path.is_file():
@@ -336,9 +338,7 @@ def load_decoder(path, config) -> dict:
                        f"actuators), not {hands.label(config.hand)} "
                        f"({len(hands.actuators(config.hand))} actuators)")
   for name in ARCHITECTURE:
-    if name == "decoder_hidden" and meta["decoder"] != "mlp":
-      continue
-    if name == "decoder_bias" and meta["decoder"] != "linear":
+    if name not in EVERY_KIND and name not in decoders.kind(meta["decoder"]).fields:
       continue
     if meta[name] != getattr(config, name):
       raise ValueError(f"the decoder in {path} has {name} = {meta[name]!r}, the config asks for "

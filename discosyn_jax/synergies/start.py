@@ -39,7 +39,7 @@ def starting_own(trainer, decoder: dict | None = None) -> np.ndarray | None:
   metrics = _reward_metrics(trainer)
   shared = np.zeros((trainer.action_size, 0))
   length = float(np.sqrt(trainer.action_size / config.n_synergies))  # lecun normal's
-  if config.decoder == "linear":
+  if config.kind.linear:
     kernel = (decoder if decoder is not None else
               networks.random_decoder(config, trainer.action_size))["synergies"]["kernel"]
     shared = np.asarray(kernel, np.float64).T

@@ -114,20 +114,20 @@ def plot_matrix(kernel: np.ndarray, actuators: list[str], path: pathlib.Path, ti
 def write(trainer, params, out_dir: pathlib.Path, *, k: float = 1.0, force: bool = False,
           height: int = 240, width: int = 320, title: str = "") -> list[pathlib.Path]:
   """Write postures.png (and matrix.png for a linear decoder) into `out_dir`."""
-  decoder = trainer.config.decoder
-  if decoder == "identity":
-    raise ValueError("this run's decoder is 'identity' (full-action PPO): it has no synergies "
+  decoder, kind = trainer.config.decoder, trainer.config.kind
+  if kind.full_action:
+    raise ValueError(f"this run's decoder is {decoder!r} (the full action): it has no synergies "
                      "to picture")
   if not 0 < k < math.inf:  # NaN too
     raise ValueError(f"--k must be a positive finite number, not {k}")
   out_dir = pathlib.Path(out_dir)
-  paths = [out_dir / POSTURES_FILE] + ([out_dir / MATRIX_FILE] if decoder == "linear" else [])
+  paths = [out_dir / POSTURES_FILE] + ([out_dir / MATRIX_FILE] if kind.linear else [])
   render.check_new(paths, force)
   out_dir.mkdir(parents=True, exist_ok=True)
   hand = trainer.config.hand
   images = posture_images(decoded_actions(trainer, params, k), height, width, hand)
   plot_postures(images, k, paths[0], f"{title} {decoder} decoder: hand at z = -k, 0, +k".strip())
-  if decoder == "linear":
+  if kind.linear:
     kernel = np.asarray(params["params"]["synergy_decoder"]["synergies"]["kernel"])
     plot_matrix(kernel, hands.actuator_names(hand_model(hand)), paths[1], f"{title} synergy matrix W (a = W z + c)".strip())
   return paths
