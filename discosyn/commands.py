@@ -142,7 +142,7 @@ def train_config(args, base=None):
 def cmd_train(args) -> None:
   from discosyn_jax import config as config_lib
   from discosyn_jax.run import owner
-  from discosyn_jax.tasks import assemble
+  from discosyn_jax import assemble
   from discosyn_jax.training import devices
 
   if args.out == "":
@@ -180,7 +180,7 @@ def next_commands(out: pathlib.Path, step, config, results) -> str:
 def cmd_eval(args) -> None:
   import jax
 
-  from discosyn_jax.tasks import assemble
+  from discosyn_jax import assemble
   from discosyn_jax.training import evaluation
 
   changes = {"backend": args.backend} if args.backend else {}
@@ -207,7 +207,7 @@ def _check_scenes(trainer, run, what: str) -> None:
 
 def cmd_synergies(args) -> None:
   from discosyn_jax.run import reading
-  from discosyn_jax.tasks import assemble
+  from discosyn_jax import assemble
   from discosyn_jax.viz import synergy_pictures
 
   if args.export is not None:
@@ -238,7 +238,7 @@ def cmd_synergies(args) -> None:
 def cmd_render(args) -> None:
   from discosyn_jax import tasks
   from discosyn_jax.run import reading
-  from discosyn_jax.tasks import assemble
+  from discosyn_jax import assemble
   from discosyn_jax.viz import videos
 
   run_dir = reading.find_run_dir(args.run)

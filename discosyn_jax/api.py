@@ -23,7 +23,7 @@ def train(config: TrainConfig | str = "quickstart", run_dir: str | pathlib.Path 
   Ctrl-C stops the run cleanly and names the checkpoint it resumes from.
   """
   from discosyn_jax.experiments import presets
-  from discosyn_jax.tasks import assemble
+  from discosyn_jax import assemble
 
   name = config if isinstance(config, str) else "run"
   if isinstance(config, str):
@@ -51,7 +51,7 @@ def evaluate(run: str | pathlib.Path, *, episodes: int | None = None,
              backend: str | None = None) -> dict[str, dict[str, float]]:
   """The deterministic policy of a run (its newest good checkpoint) or of one checkpoint:
   {task: {"success", "return"}} over `episodes` per task (default: the run's eval_envs)."""
-  from discosyn_jax.tasks import assemble
+  from discosyn_jax import assemble
   from discosyn_jax.training import evaluation
 
   changes = {"backend": backend} if backend else {}

@@ -68,7 +68,7 @@ def train_each(out: pathlib.Path, variants, seeds, outside: float, config_of,
   """(variant, seed, its folder) of each run, trained one at a time on planted_out<n>
   (`config_of(variant, seed, task names, steps)` its config); a finished run is kept (its
   final checkpoint, or its closing evaluation where only its record is left)."""
-  from discosyn_jax.tasks import assemble
+  from discosyn_jax import assemble
 
   names = register_outside_tasks(outside)
   done = []

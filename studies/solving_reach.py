@@ -40,7 +40,7 @@ def solving_actions(ppo_run: pathlib.Path, episodes: int = 16) -> dict[str, np.n
   import jax
 
   from discosyn_jax.synergies import fitting
-  from discosyn_jax.tasks import assemble
+  from discosyn_jax import assemble
   from discosyn_jax.training import evaluation
 
   trainer, state = assemble.load(ppo_run)
@@ -66,7 +66,7 @@ def starting_decoder(run) -> dict | None:
   draw for every row of a seed: networks.random_decoder)."""
   from discosyn_jax.agent import networks
   from discosyn_jax.synergies import start
-  from discosyn_jax.tasks import assemble
+  from discosyn_jax import assemble
 
   trainer = assemble.trainer(run.config.replace(steps=1))
   params = start.starting_decoder(trainer)

@@ -201,7 +201,7 @@ def saves(run_dir: pathlib.Path) -> None:
 def library(run_dir: pathlib.Path) -> int:
   import dataclasses
 
-  from discosyn_jax.tasks import assemble
+  from discosyn_jax import assemble
 
   config = dataclasses.replace(TOY, steps=100000, eval_every=0)
   try:

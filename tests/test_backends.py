@@ -7,7 +7,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from discosyn_jax import tasks
+from discosyn_jax import assemble, tasks
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import hands, physics
 from tests import helpers
@@ -91,7 +91,7 @@ def test_the_mjx_implementation_is_chosen_by_name_and_checked(monkeypatch):
 def test_mjx_trainer_inits_and_trains_one_step():
   # `init` once ran MJX op by op (minutes per reset); it must be one jitted function, so this
   # test, at 2 envs, takes about as long as compiling the step
-  trainer = tasks.trainer(TrainConfig(**helpers.ONE_MJX_STEP))
+  trainer = assemble.trainer(TrainConfig(**helpers.ONE_MJX_STEP))
   assert trainer.envs[0].backend == "mjx"
   state = trainer.init()
   assert trainer._fresh_state._cache_size() == 1  # built by one compiled function

@@ -15,7 +15,7 @@ from discosyn_jax.config import TrainConfig
 from discosyn_jax.run import checkpoints
 from discosyn_jax.synergies import diagnostics, discovery, fitting
 from discosyn_jax.training.trainer import Trainer
-from discosyn_jax.tasks import assemble
+from discosyn_jax import assemble
 from discosyn_jax.experiments import paper, presets, report
 from discosyn_jax.experiments.method import Method
 from discosyn_jax.tasks import planted, registry

@@ -18,7 +18,7 @@ from discosyn_jax.config import TrainConfig
 from discosyn_jax.run import checkpoints, layout, logs, reading
 from discosyn_jax.synergies import fitting
 from discosyn_jax.training.trainer import _episode_metrics
-from discosyn_jax.tasks import assemble
+from discosyn_jax import assemble
 from discosyn_jax.experiments import paper, presets, record, report, report_runs
 from discosyn_jax.experiments.method import Method
 from tests import reference

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from discosyn_jax import tasks
+from discosyn_jax import assemble, tasks
 from discosyn import cli
 from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
@@ -28,7 +28,7 @@ def saved_run(run_dir, config, envs=None):
   videos read a run the same way whether it trained for a minute or not at all."""
   run_dir.mkdir(parents=True, exist_ok=True)
   config_lib.save(config, run_dir / layout.CONFIG_FILE)
-  trainer = Trainer(config, envs) if envs is not None else tasks.trainer(config)
+  trainer = Trainer(config, envs) if envs is not None else assemble.trainer(config)
   state = trainer.init()
   checkpoints.save(run_dir, state, config.keep_checkpoints, final=True)
   return trainer, state
@@ -93,7 +93,7 @@ def test_synergies_command_draws_postures_and_the_linear_matrix(linear_run, tmp_
 
 def test_mlp_decoder_gets_postures_only(tmp_path):
   config = TINY.replace(decoder="mlp")
-  trainer = tasks.trainer(config)
+  trainer = assemble.trainer(config)
   paths = synergy_pictures.write(trainer, trainer.init().params, tmp_path, height=48, width=64)
   assert [p.name for p in paths] == ["postures.png"]
   assert sorted(p.name for p in tmp_path.iterdir()) == ["postures.png"]

@@ -8,7 +8,7 @@ import pathlib
 import numpy as np
 import pytest
 
-from discosyn_jax import tasks
+from discosyn_jax import assemble, tasks
 from discosyn_jax import config as config_lib
 from discosyn_jax.agent import networks
 from discosyn_jax.synergies import diagnostics, fitting, priors, start
@@ -64,7 +64,7 @@ def test_every_seed_of_a_run_starts_in_the_same_subspace_and_only_there():
   for seed in (0, 1):
     config = presets.preset("set1-disco3-linear").replace(
         tasks=("valve3",), seed=seed, **TINY).validate()
-    trainer = tasks.trainer(config)
+    trainer = assemble.trainer(config)
     starts.append(fitting.basis(fitting.architecture(config.to_dict()),
                                   start.starting_decoder(trainer)))
     random_start = fitting.basis(fitting.architecture(config.to_dict()),

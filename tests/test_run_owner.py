@@ -14,7 +14,7 @@ from discosyn import cli
 from discosyn_jax import tasks
 from discosyn_jax.experiments import paper, report_runs
 from discosyn_jax.run import layout, owner
-from discosyn_jax.tasks import assemble
+from discosyn_jax import assemble
 from discosyn_jax.viz import plots
 from tests.fault_worker import TOY, toy_envs
 

@@ -15,7 +15,7 @@ from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import wrappers
 from discosyn_jax.run import checkpoints, owner, reading
-from discosyn_jax.tasks import assemble
+from discosyn_jax import assemble
 from discosyn_jax.training import loop
 from discosyn_jax.training.trainer import Trainer
 from tests.toy_env import ReachAction
@@ -87,7 +87,7 @@ def test_resume_gives_the_same_state_as_an_unbroken_run(valve_run, tmp_path):
   broken = tmp_path / "broken"
   assemble.train(VALVE.replace(steps=2), broken, progress=False, log=lambda *_: None)
   # the unbroken run's periodic checkpoint at step 2 holds this run's final state
-  trainer = tasks.trainer(VALVE)
+  trainer = assemble.trainer(VALVE)
   jax.tree.map(np.testing.assert_array_equal,
                jax.device_get(loop.restore(trainer, straight_dir / "checkpoints" / "2")),
                jax.device_get(loop.restore(trainer, broken / "final")))
@@ -108,7 +108,7 @@ def test_resume_gives_the_same_state_as_an_unbroken_run(valve_run, tmp_path):
 
 def test_checkpoint_restores_the_whole_state(valve_run):
   run_dir, straight = valve_run
-  trainer = tasks.trainer(VALVE)
+  trainer = assemble.trainer(VALVE)
   restored = loop.restore(trainer, run_dir / "final")
   jax.tree.map(np.testing.assert_array_equal, jax.device_get(straight["state"]),
                jax.device_get(restored))

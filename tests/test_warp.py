@@ -22,7 +22,7 @@ import pytest
 pytest.importorskip("warp", reason="MJX's Warp implementation needs warp-lang: "
                                    'pip install ".[warp]"')
 
-from discosyn_jax import tasks  # noqa: E402
+from discosyn_jax import assemble, tasks  # noqa: E402
 from discosyn_jax.config import TrainConfig  # noqa: E402
 from discosyn_jax.env import hands, scripted  # noqa: E402
 from discosyn_jax.env.hand_env import HandEnv  # noqa: E402
@@ -138,7 +138,7 @@ def test_warp_trainer_inits_and_trains_one_step(monkeypatch):
   """tests/test_backends.py's MJX train step, on Warp, with the reset pool (the `gpu`
   scale's): the training wrappers select rows of the physics state."""
   monkeypatch.setenv("DISCOSYN_MJX_IMPL", "warp")
-  trainer = tasks.trainer(TrainConfig(**helpers.ONE_MJX_STEP, reset_pool=True))
+  trainer = assemble.trainer(TrainConfig(**helpers.ONE_MJX_STEP, reset_pool=True))
   assert trainer.envs[0].physics.impl == "warp"
   helpers.assert_one_step_learns(trainer, trainer.init())
 

@@ -13,7 +13,7 @@ import json
 import jax
 import numpy as np
 
-from discosyn_jax import tasks
+from discosyn_jax import assemble, tasks
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.training.trainer import Trainer
 from tests.test_trainer import two_task_trainer
@@ -63,14 +63,14 @@ def main():
                        **{**small, "num_envs": 4, "unroll_length": 3, "update_epochs": 1})
   runs, batches = [], []
   for n in (1, 2):
-    trainer = tasks.trainer(config, devices=n)
+    trainer = assemble.trainer(config, devices=n)
     batches.append(native_batches(trainer))
     runs.append(params_after(trainer, steps=1, evaluate=True))
   out["native_max_param_diff"] = max_difference(runs[0][0], runs[1][0])
   out["native_eval"] = [jax.tree.map(float, r[2]) for r in runs]
   out["native_callback_batches"] = [sorted(set(b)) for b in batches]
   try:
-    tasks.trainer(config.replace(num_envs=5, unroll_length=4), devices=2)
+    assemble.trainer(config.replace(num_envs=5, unroll_length=4), devices=2)
   except ValueError as err:
     out["odd_batch_error"] = str(err)
   print(json.dumps(out))

@@ -51,7 +51,7 @@ jax_setup.setup_jax()  # the compile cache; MJX imported quietly
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
-from discosyn_jax import tasks  # noqa: E402
+from discosyn_jax import assemble, tasks  # noqa: E402
 from discosyn_jax.synergies import start  # noqa: E402
 from discosyn_jax.experiments import bench, paper  # noqa: E402
 from discosyn_jax.experiments.method import Method  # noqa: E402
@@ -172,7 +172,7 @@ def start_method(log: Log, method: str, config, evaluations: bool = True):
     log("phase", method=method, phase=name, seconds=took[name])
     return out
 
-  trainer = phase("build", lambda: tasks.trainer(config))
+  trainer = phase("build", lambda: assemble.trainer(config))
   decoder = phase("prior", lambda: start.starting_decoder(trainer))
   state = phase("init", lambda: trainer.init(decoder_params=decoder))
   train_step = phase("train_compile", lambda: trainer.train_step.lower(state).compile())

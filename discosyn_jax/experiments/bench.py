@@ -194,9 +194,9 @@ def bench_row(config, args, impl: str | None = None) -> dict:
   """Every figure of one backend (MJX's `impl`) and batch: see the module docstring."""
   import jax
 
-  from discosyn_jax import tasks
+  from discosyn_jax import assemble, tasks
   with mjx_impl(impl):
-    trainer = tasks.trainer(config, devices=args.devices) if args.train else None
+    trainer = assemble.trainer(config, devices=args.devices) if args.train else None
     envs = trainer.envs if trainer else tasks.make_envs(config)
   clock = CallbackClock(envs)
   T, B = config.unroll_length, config.num_envs

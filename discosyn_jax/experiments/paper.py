@@ -60,7 +60,7 @@ from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import hands
 from discosyn_jax.run import layout
 from discosyn_jax.synergies import fitting
-from discosyn_jax.tasks import assemble
+from discosyn_jax import assemble
 from discosyn_jax.training import evaluation
 from discosyn_jax.experiments import presets, record
 from discosyn_jax.experiments.method import Method, Residual

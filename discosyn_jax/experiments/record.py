@@ -102,7 +102,7 @@ def z_of(run_dir: pathlib.Path) -> dict[str, np.ndarray]:
   if path.is_file():
     with np.load(path) as data:
       return {task: data[task].astype(np.float32) for task in data.files}
-  from discosyn_jax.tasks import assemble
+  from discosyn_jax import assemble
 
   trainer, state = assemble.load(run_dir)
   return z_samples(trainer, state)

@@ -1,10 +1,9 @@
 """The tasks: one module per task, the registry that builds their environments
-(registry.py), the task sets (sets.py), and the one place that assembles a run from a config
-(assemble.py: the envs and the Trainer on them).
+(registry.py) and the task sets (sets.py). The run on them is assembled above, in
+discosyn_jax/assemble.py.
 
 `import tasks` is light: it holds TASK_SETS. Anything else (`tasks.make`, `tasks.REGISTRY`,
-..., and `tasks.trainer`, assemble.py's) loads the registry, and with it JAX and MuJoCo, on
-first use.
+...) loads the registry, and with it JAX and MuJoCo, on first use.
 """
 
 import importlib
@@ -15,8 +14,6 @@ __all__ = ["TASK_SETS"]  # and, loaded on first use, the registry's names
 
 
 def __getattr__(name: str):
-  if name == "trainer":  # the Trainer of a config on its tasks' envs
-    return importlib.import_module("discosyn_jax.tasks.assemble").trainer
   registry = importlib.import_module("discosyn_jax.tasks.registry")  # (not `from discosyn_jax.tasks import`: it asks here)
   try:
     return getattr(registry, name)

@@ -1,6 +1,6 @@
 """The task registry: `make(name)` builds a task's environment, `make_envs(config)` those of a
 config's tasks. It knows environments only: the Trainer on them is assembled by
-discosyn_jax/tasks/assemble.py. Reached as `tasks.make`, ... through
+discosyn_jax/assemble.py. Reached as `tasks.make`, ... through
 discosyn_jax/tasks/__init__.py."""
 
 from __future__ import annotations

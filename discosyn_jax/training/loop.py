@@ -5,7 +5,7 @@ loop writes one JSON line of metrics (and TensorBoard scalars, logs.py), evaluat
 deterministic policy every `eval_every` steps, checkpoints every `checkpoint_every` steps and
 at the end, where it also runs the closing evaluation (`closing_episodes` a task,
 closing.json) and calls its `on_end` hook (the assembler draws the curves there). It is given
-its Trainer (discosyn_jax/tasks/assemble.py builds one from a config); the decoder a run
+its Trainer (discosyn_jax/assemble.py builds one from a config); the decoder a run
 starts from is synergies/start.py's, the progress output run/progress.py's.
 """
 

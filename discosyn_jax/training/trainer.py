@@ -60,7 +60,7 @@ class TrainState:
 class Trainer:
   """Builds the module, the optimiser and the jitted functions for one config.
 
-  `envs`, one per task of the config, are built by the caller (`tasks.trainer(config)` for
+  `envs`, one per task of the config, are built by the caller (`assemble.trainer(config)` for
   the registered tasks): any Brax-style env with `episode_length`, a `success` metric and
   actions in [-1, 1] works (the tests use a tiny one). `devices`
   (a list, a count, or None for all) holds the mesh the env batch is split over.

@@ -1,7 +1,8 @@
-"""The one place that assembles a run from a config: the envs of its tasks (registry.py) and
-the Trainer on them, trained in a run folder by the host loop (training/loop.py), or a run's
-trained state restored. The public API (`ds.train`, `ds.evaluate`), the command line and the
-experiments all go through here; the library below takes a Trainer and knows no registry.
+"""The one place that assembles a run from a config: the envs of its tasks (tasks/registry.py)
+and the Trainer on them, trained in a run folder by the host loop (training/loop.py), or a
+run's trained state restored. A layer of its own, above the tasks and below the experiments:
+the public API (`ds.train`, `ds.evaluate`), the command line and the experiments all go
+through here; the library below takes a Trainer and knows no registry.
 
 A test or a study with environments of its own registers them (`registry.register_env`)
 and then goes through here too.
