@@ -13,7 +13,8 @@
     ds.synergy_env(env, syn)                  # env's action: the b synergies (any JAX RL library)
 
 The config: TrainConfig (its defaults are the recommended setup: a linear decoder of 3
-synergies started in the reward prior, z bounded, on task set #1), preset, PRESETS.
+synergies started in the reward prior, z bounded, on task set #1), preset, PRESETS;
+a decoder kind of one's own: DecoderKind, register_decoder (discosyn_jax/decoders.py).
 Tasks: Task, TaskConfig, TASK_SETS, task_names, make_env, register_task, load_task.
 Runs: train, evaluate, read_run, Run. Synergies: Synergies, shipped_synergies, synergy_env
 (docs/TAKE_HOME.md). setup_jax: MJX imported quietly, the compile cache on, and what Brax's
@@ -56,6 +57,8 @@ _API = {
     "TrainConfig": ("discosyn_jax.config", "TrainConfig"),
     "preset": ("discosyn_jax.experiments.presets", "preset"),
     "PRESETS": ("discosyn_jax.experiments.presets", "PRESETS"),
+    "DecoderKind": ("discosyn_jax.decoders", "DecoderKind"),
+    "register_decoder": ("discosyn_jax.decoders", "register"),
     "Task": ("discosyn_jax.env.task", "Task"),
     "TaskConfig": ("discosyn_jax.env.task", "TaskConfig"),
     "TASK_SETS": ("discosyn_jax.tasks.sets", "TASK_SETS"),
