@@ -3,8 +3,8 @@ the Trainer on them, trained in a run folder by the host loop (training/loop.py)
 trained state restored. The public API (`ds.train`, `ds.evaluate`), the command line and the
 experiments all go through here; the library below takes a Trainer and knows no registry.
 
-A test or a study with environments of its own registers them (`registry.register_env`)
-and then goes through here too.
+A test or a study with environments of its own registers them (`registry.register`) and
+then goes through here too.
 """
 
 from __future__ import annotations
