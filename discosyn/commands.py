@@ -66,7 +66,7 @@ def cmd_render_scenes(args) -> None:
   from PIL import Image
 
   from discosyn_jax import tasks
-  from discosyn_jax.env import hands, scripted
+  from discosyn_jax.env import hands
   from discosyn_jax.viz import render
 
   out = pathlib.Path(args.out)
@@ -79,7 +79,7 @@ def cmd_render_scenes(args) -> None:
     env = tasks.make(name, backend="native", hand=hand)
     # a frame from the task's scripted motion (valves: the middle of a stroke, fingers dipped);
     # a hand of one's own has none: its initial pose
-    actions = (jnp.asarray(scripted.for_task(name, args.step, env.dt, hand.name))
+    actions = (jnp.asarray(env.task.motion.actions(args.step, env.dt, hand.name))
                if hand.name in hands.SHIPPED else [])
     state = env.reset(jax.random.PRNGKey(args.seed))
     for action in actions:

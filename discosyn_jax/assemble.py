@@ -4,8 +4,8 @@ run's trained state restored. A layer of its own, above the tasks and below the 
 the public API (`ds.train`, `ds.evaluate`), the command line and the experiments all go
 through here; the library below takes a Trainer and knows no registry.
 
-A test or a study with environments of its own registers them (`registry.register_env`)
-and then goes through here too.
+A test or a study with environments of its own registers them (`registry.register`) and
+then goes through here too.
 """
 
 from __future__ import annotations

@@ -89,12 +89,12 @@ def fidelity(env, name: str, episodes: int, long_episodes: int, long_steps: int,
   import jax
   import jax.numpy as jnp
 
-  from discosyn_jax.env import hands, scripted
+  from discosyn_jax.env import hands
   from discosyn_jax.env.physics.native import deepest_penetration
   from discosyn_jax.env.rollouts import run_episode
 
   keys = jax.random.split(jax.random.PRNGKey(seed), episodes)
-  script = jnp.asarray(scripted.for_task(name, env.episode_length, env.dt, env.hand.name))
+  script = jnp.asarray(env.task.motion.actions(env.episode_length, env.dt, env.hand.name))
   _, states = run_episode(env, keys, lambda t, k, n: jnp.broadcast_to(script[t], (n, script.shape[1])))
   done = np.asarray(states.done)
   scripted_rate = final_success(np.asarray(states.metrics["success"]), done, env.episode_length).mean()

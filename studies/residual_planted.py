@@ -13,6 +13,7 @@ succeed without the residual: success alone undersells what the part outside cos
 from __future__ import annotations
 
 import argparse
+import functools
 import pathlib
 
 VARIANTS = {  # name: the residual's fields
@@ -28,14 +29,10 @@ def register_outside_tasks(outside: float) -> tuple[str, ...]:
   """planted_out0-3: planted0-3 with `outside`, in this process's registry."""
   from discosyn_jax.tasks import planted, registry
 
-  names = []
-  for n in range(4):
-    name = f"planted_out{n}"
-    registry.REGISTRY[name] = registry.Entry(
-        lambda config: config, lambda n=n, **kw: planted.default_config(index=n, outside=outside, **kw),
-        f"planted{n} with a target part outside the span ({outside})", env=planted.PlantedEnv)
-    names.append(name)
-  return tuple(names)
+  return tuple(registry.register(
+      f"planted_out{n}", planted.PlantedEnv,
+      functools.partial(planted.default_config, index=n, outside=outside),
+      f"planted{n} with a target part outside the span ({outside})") for n in range(4))
 
 
 def config_for(variant: str, seed: int, task_names, steps: int | None):

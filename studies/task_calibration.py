@@ -20,7 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from discosyn_jax import tasks
-from discosyn_jax.env import hands, scripted
+from discosyn_jax.env import hands
 from discosyn_jax.env.physics.native import deepest_penetration
 from discosyn_jax.env.rollouts import run_episode
 from studies import physics_study
@@ -89,7 +89,7 @@ def main(argv=None):
     if "random" in args.policies:
       report(f"{name} random", env, *rollout(env, uniform, args.episodes, args.seed))
     if "scripted" in args.policies:
-      script = jnp.asarray(scripted.for_task(name, env.episode_length, env.dt, env.hand.name))
+      script = jnp.asarray(env.task.motion.actions(env.episode_length, env.dt, env.hand.name))
       report(f"{name} scripted", env,
              *rollout(env, lambda t, k, n: jnp.broadcast_to(script[t], (n, script.shape[1])),
                       args.episodes, args.seed))

@@ -77,14 +77,14 @@ def measure(name: str, hand: str, batch: int, steps: int, with_jax: bool, native
   import numpy as np
 
   from discosyn_jax import tasks
-  from discosyn_jax.env import hands, scripted
+  from discosyn_jax.env import hands
   from discosyn_jax.env.physics import mjx_backend
   from discosyn_jax.env.physics.mjx_warp import WarpBackend
 
   native = tasks.make(name, backend="native", hand=hand)
   model, n = native.mj_model, native.task.config.n_substeps
   start = jax.jit(jax.vmap(native.reset))(jax.random.split(jax.random.PRNGKey(0), batch))
-  actions = np.repeat(scripted.for_task(name, steps, native.dt, hand)[:, None], batch, axis=1)
+  actions = np.repeat(native.task.motion.actions(steps, native.dt, hand)[:, None], batch, axis=1)
   actions = jnp.asarray(actions, jnp.float32)
   ctrl = native.action_to_ctrl(actions)
   host = jax.device_get(start.pipeline_state)

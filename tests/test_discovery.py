@@ -102,11 +102,11 @@ def test_the_found_task_pays_nothing_until_an_action_lands_near_its_target():
   success as for the dense task. Its set: three dense tasks and it."""
   assert tasks.TASK_SETS["planted_found"][-1] == "planted_found3"
   found, dense = tasks.make("planted_found3"), tasks.make("planted3")
-  assert found.config.paid_within == registry.PAID_WITHIN > 0
+  assert found.config.paid_within == planted.PAID_WITHIN > 0
   state = found.reset(jax.random.PRNGKey(5))
   target = state.pipeline_state["target"]
   np.testing.assert_array_equal(target, dense.reset(jax.random.PRNGKey(5)).pipeline_state["target"])
-  radius = registry.PAID_WITHIN * np.sqrt(found._target_power)  # the error where pay starts
+  radius = planted.PAID_WITHIN * np.sqrt(found._target_power)  # the error where pay starts
   direction = target / jnp.linalg.norm(target)
   for error, paid in ((0.9 * radius, True), (1.1 * radius, False)):
     action = target - error * direction
@@ -118,8 +118,8 @@ def test_the_found_task_pays_nothing_until_an_action_lands_near_its_target():
     tasks.make("planted0", paid_within=1.5)
 
 
-@pytest.mark.parametrize("task_set,reach", [("planted_reach", registry.REACH),
-                                            ("planted_far", registry.REACH_FAR)])
+@pytest.mark.parametrize("task_set,reach", [("planted_reach", planted.REACH),
+                                            ("planted_far", planted.REACH_FAR)])
 def test_the_reach_task_pays_only_for_an_excursion_along_its_direction(task_set, reach):
   """planted_reach3 / planted_far3: nothing short of their reach along the first axis of the
   plane (a posture at its own target is paid nothing), then a reward rising to 1 over

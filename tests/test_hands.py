@@ -14,7 +14,7 @@ import pytest
 from discosyn_jax import tasks
 from discosyn import cli
 from discosyn_jax import config as config_lib
-from discosyn_jax.env import assets, hands, scene, scripted
+from discosyn_jax.env import assets, hands, scene
 from discosyn_jax.run import layout
 from tests import helpers
 from tests.helpers import run_episode
@@ -59,7 +59,7 @@ def test_leap16_sweep_turns_valve3_alike_on_both_backends():
   (measured 0.007 and 0.006; the tolerances of valve3 on our hand, test_backends.py)."""
   native, mjx = helpers.env("valve3", hand="leap16"), helpers.env("valve3", "mjx", hand="leap16")
   start = jax.jit(native.reset)(jax.random.PRNGKey(5))
-  actions = jnp.asarray(scripted.for_task("valve3", 50, native.dt, "leap16"))
+  actions = jnp.asarray(native.task.motion.actions(50, native.dt, "leap16"))
   out = {}
   for env, state in ((native, start), (mjx, helpers.on_mjx(native, mjx, start))):
     step = lambda s, a, env=env: (env.step(s, a),) * 2

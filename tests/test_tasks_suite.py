@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from discosyn_jax import tasks
-from discosyn_jax.env import hands, scene, scripted
+from discosyn_jax.env import hands, scene
 from discosyn_jax.env.physics.native import _INTEGRATION
 from discosyn_jax.tasks import dice, weight_pull
 from tests import helpers
@@ -40,7 +40,7 @@ def test_task_sets():
 
 def _scripted_trajectory(env, name, steps, valve_angle=None):
   """Two envs from random starts (the valve at `valve_angle` if given) under the task's script."""
-  actions = jnp.asarray(scripted.for_task(name, steps, env.dt))
+  actions = jnp.asarray(env.task.motion.actions(steps, env.dt))
 
   def roll(keys):
     state = jax.vmap(env.reset)(keys)
@@ -122,7 +122,7 @@ def test_native_and_mjx_agree(name):
   steps, atol = AGREE[name]
   native = helpers.env(name)
   start = jax.jit(native.reset)(jax.random.PRNGKey(5))
-  actions = jnp.asarray(scripted.for_task(name, steps, native.dt))
+  actions = jnp.asarray(native.task.motion.actions(steps, native.dt))
   mjx_env = helpers.env(name, "mjx")
   out = {}
   for env, state in ((native, start), (mjx_env, helpers.on_mjx(native, mjx_env, start))):

@@ -67,7 +67,7 @@ def scripted_run(name, hand):
   """(native env, its start states, the actions) of `name` on `hand`."""
   native = helpers.env(name, hand=hand)
   start = jax.jit(jax.vmap(native.reset))(jax.random.split(jax.random.PRNGKey(0), ENVS))
-  motion = scripted.for_task(name, STEPS, native.dt, hand)
+  motion = native.task.motion.actions(STEPS, native.dt, hand)
   return native, start, jnp.asarray(np.repeat(motion[:, None], ENVS, axis=1), jnp.float32)
 
 

@@ -104,7 +104,8 @@ class PhysicsReach(ReachAction):
 
 
 # The toy tasks the experiment and report tests run, registered whole in the task registry
-# (registry.register_env) so that they go through the one assembler as any task does.
+# (registry.register: a function that makes an env) so that they go through the one
+# assembler as any task does.
 TARGET = np.linspace(-0.8, 0.8, 20)
 
 
@@ -132,4 +133,4 @@ def register() -> None:
   from discosyn_jax.tasks import registry
 
   for name, make in TOY_TASKS.items():
-    registry.register_env(name, make)
+    registry.register(name, make)

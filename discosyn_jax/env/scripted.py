@@ -4,9 +4,14 @@ Our hand (shadow20), strokes of 1.33 s: fingers straight and the wrist swung clo
 low), the four fingers dipped into the valve's plane, then the wrist swung counter-clockwise
 (WRJ1 up), which drags whatever the fingers hold or touch counter-clockwise about the
 valve's axis. leap16 has no wrist: its fingers dip and sweep sideways (leap_sweep).
+
+Which motion a task gets is the task's own declaration (Task.motion: a Motion below).
 """
 
 from __future__ import annotations
+
+import dataclasses
+from typing import Callable, Mapping
 
 import numpy as np
 
@@ -83,25 +88,20 @@ def leap_sweep(steps: int, dt: float, stroke_s: float = 1.33, dip: float = 0.3,
   return actions
 
 
-def for_task(name: str, steps: int, dt: float, hand: str = hands.DEFAULT) -> np.ndarray:
-  """The deliberate motion tried on task `name` with shipped `hand` (calibration, tests,
-  scene pictures); ValueError for a hand without scripts.
+@dataclasses.dataclass(frozen=True)
+class Motion:
+  """The deliberate motion a task declares (Task.motion), on each shipped hand: on ours
+  `script(steps, dt, **options)`, one of the scripts above; on leap16, which has no wrist,
+  leap_sweep in `leap_direction`, whatever the task."""
+  script: Callable[..., np.ndarray] = grasp_and_sweep
+  options: Mapping[str, float] = dataclasses.field(default_factory=dict)
+  leap_direction: float = 1.0
 
-  Our hand: the valves and the goal valve get the counter-clockwise grasp-and-sweep,
-  valve_cw its mirror; screw_topdown the mirror with the fingers dipped deeper, around the
-  handle. The dice has no script: it gets the sweep, which only shows the hand moving.
-  leap16: the valves get leap_sweep (valve_cw its mirror), every other task too.
-  """
-  if hand == "leap16":
-    return leap_sweep(steps, dt, direction=-1.0 if name == "valve_cw" else 1.0)
-  if hand != "shadow20":
-    raise ValueError(f"no scripted motions for hand {hand}: only for {', '.join(hands.SHIPPED)}")
-  if name == "weight_pull":
-    return hook_and_lift(steps, dt)
-  if name == "screw":
-    return finger_roll(steps, dt)
-  if name == "screw_topdown":
-    return grasp_and_sweep(steps, dt, dip=0.5, direction=-1.0)
-  if name == "valve_cw":
-    return grasp_and_sweep(steps, dt, direction=-1.0)
-  return grasp_and_sweep(steps, dt)
+  def actions(self, steps: int, dt: float, hand: str = hands.DEFAULT) -> np.ndarray:
+    """(steps, actuators) actions in [-1, 1] on shipped `hand`; ValueError for a hand without
+    scripts."""
+    if hand == "leap16":
+      return leap_sweep(steps, dt, direction=self.leap_direction)
+    if hand != "shadow20":
+      raise ValueError(f"no scripted motions for hand {hand}: only for {', '.join(hands.SHIPPED)}")
+    return self.script(steps, dt, **self.options)

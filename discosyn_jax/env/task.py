@@ -12,14 +12,15 @@ import contextlib
 import dataclasses
 import os
 import pathlib
-from typing import Any
+import types
+from typing import Any, Mapping
 
 import jax
 import mujoco
 
 from discosyn_jax import checks
 from discosyn_jax.env.settings import CONTROL_DT
-from discosyn_jax.env import hands, scene
+from discosyn_jax.env import hands, scene, scripted
 from discosyn_jax.env.physics import PhysicsView
 
 Info = dict[str, Any]
@@ -33,7 +34,7 @@ class TaskConfig:
   episode_length: int = 100  # control steps of 0.04 s: 4 s
   # The physics of one control step (CONTROL_DT): n_substeps MuJoCo steps of CONTROL_DT /
   # n_substeps each; the solver settings go to the model's <option>. These defaults are the
-  # "reference" physics; a run's profile may override them (tasks.physics_overrides).
+  # "reference" physics; a run's profile may override them (Task.fast_physics).
   n_substeps: int = 10
   solver_iterations: int = 8
   ls_iterations: int = 8
@@ -65,6 +66,12 @@ class Task(abc.ABC):
   mount = hands.PALM_DOWN  # or hands.PALM_UP, for objects that rest on the palm
   config_class: type = TaskConfig  # a task of one's own: its config (tasks.load)
   summary: str = ""  # one line for `discosyn tasks`
+  # the config fields the "fast" physics profile sets (env/settings.py: PHYSICS): a cheaper
+  # setting measured within the reference's tolerances; none keeps the reference under both
+  fast_physics: Mapping[str, Any] = types.MappingProxyType({})
+  # the deliberate motion tried on the task (calibration, tests, scene pictures): the sweep
+  # unless the task declares its own (on a task it cannot do, it only shows the hand moving)
+  motion: scripted.Motion = scripted.Motion()
 
   def __init__(self, config: TaskConfig):
     self.config = config

@@ -1,7 +1,9 @@
 """Pieces every task module uses: the hand's joint addresses (any hand: hands.py), its noisy
-start pose, angles."""
+start pose, angles, the fast physics settings."""
 
 from __future__ import annotations
+
+import types
 
 import jax
 import jax.numpy as jnp
@@ -9,6 +11,13 @@ import mujoco
 import numpy as np
 
 from discosyn_jax.env import hands
+
+# The "fast" physics profile's settings our tasks declare (Task.fast_physics): each task's
+# cheapest that stayed within the tolerances of the reference (4 ms x 10) in
+# studies/physics_study.py (docs/BENCHMARKS.md, "Physics settings", 2026-12-02): 8 ms steps,
+# the valves' contacts as stiff as at 4 ms (refsafe off; the screws diverge or bounce so).
+EIGHT_MS = types.MappingProxyType(dict(n_substeps=5))
+EIGHT_MS_STIFF = types.MappingProxyType(dict(n_substeps=5, refsafe=False))
 
 
 class HandJoints:

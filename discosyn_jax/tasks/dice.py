@@ -29,6 +29,7 @@ docs/TASKS_NOTES.md.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import jax
@@ -80,6 +81,8 @@ def rotation_angle(a: jax.Array, b: jax.Array) -> jax.Array:
 class Dice(Task):
   scene = "dice"
   mount = hands.PALM_UP
+  fast_physics = common.EIGHT_MS
+  # no motion of its own: the sweep (Task.motion) only shows the hand moving
 
   def __init__(self, config: DiceConfig):
     super().__init__(config)
@@ -146,3 +149,13 @@ class Dice(Task):
   def success(self, view: PhysicsView, info: Info) -> jax.Array:
     close = self.error(view, info) < self.config.success_angle
     return (close & (self.terminated(view, info) == 0)).astype(jnp.float32)
+
+
+# this family's tasks: the registry gives each to `register` (task, default config, summary)
+TASKS = {
+    "dice": (Dice, default_config, "palm up: turn a free cube about the palm normal to a goal angle"),
+    # the dice as first specified: any axis, within 0.1 rad, no shaping (solved by no method)
+    "dice_full": (Dice, functools.partial(default_config, goal_axis="any", goal_min_angle=0.4,
+                                          success_angle=0.1, progress_scale=0.0, success_bonus=0.0),
+                  "palm up: turn a free cube to a random orientation (any axis, 0.1 rad)"),
+}

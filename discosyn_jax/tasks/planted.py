@@ -55,6 +55,20 @@ SPAN_SEED = 26  # fixed; changing it plants another span in every run
 ACTION_SIZE = 20
 MAX_TARGET = 0.9  # the largest action a target asks for
 EXCURSION_WIDTH = 0.5  # an excursion task's reward rises from 0 to 1 over this much more reach
+# planted_found3: no reward until the error is below 0.7 of a typical target's size; the
+# initial decoder's noise (std 0.3 on 20 actuators) alone is larger, so the task is first
+# paid once the dense tasks have narrowed it (std ~0.2: a quarter of the steps at the target)
+PAID_WITHIN = 0.7
+# planted_reach3: paid only where the action reaches 1.0 along the task's direction: within
+# what plane 2's dense targets ask along it (up to 1.46; planes 0 and 1: 0.40, 0.91), so a
+# decoder serving the dense tasks reaches it; at the start 1.8-2.0 % of PPO's samples and
+# 0.1-8 % of the synergy preset's (seeds 0-2) reach it, set before any run (2026-12-06)
+REACH = 1.0
+# planted_far3: the same task reaching 1.4, near the largest the dense targets ask along its
+# direction (1.46), which a bounded z gives only near a corner of its box: at the start
+# 0.15 % of PPO's samples, 0-0.75 % of the synergy preset's. Set after planted_reach3 was
+# found at once by every synergy run (0.03-0.13 M env steps, 2026-12-06), before any run of it
+REACH_FAR = 1.4
 
 
 @dataclasses.dataclass(frozen=True)
@@ -184,3 +198,30 @@ class PlantedEnv(Env):
     success = (reach >= self.config.excursion).astype(jnp.float32)
     metrics = {**state.metrics, "success": success, "reward/reach": reward}
     return state.replace(reward=reward, metrics=metrics)
+
+
+def _task(index: int, slack: bool, paid_within: float = 0.0, excursion: float = 0.0) -> tuple:
+  """One task of the bed as the registry's `register` takes it: the env class (built from
+  its config alone), its default config and its summary."""
+  what = "only the error inside the span counts" if slack else "the whole error counts"
+  if paid_within:
+    what += f"; paid only within {paid_within:g} of a typical target"
+  summary = f"reach a posture in plane {index} of the planted 3-D span; {what}"
+  if excursion:
+    summary = (f"reach beyond {excursion:g} along the first axis of plane {index} of the "
+               "planted 3-D span; paid nothing short of it")
+  config = functools.partial(default_config, index=index, slack=slack, paid_within=paid_within,
+                             excursion=excursion)
+  return PlantedEnv, config, summary
+
+
+# the bed's tasks (one span, a plane per task): the registry gives each to `register`
+TASKS = {
+    **{f"planted{n}": _task(n, slack=False) for n in range(4)},
+    **{f"planted_slack{n}": _task(n, slack=True) for n in range(4)},
+    # a task of the bed that pays nothing until it is found (planted_found's fourth)
+    "planted_found3": _task(3, slack=False, paid_within=PAID_WITHIN),
+    # a task of the bed paid only for an excursion (planted_reach's and planted_far's fourth)
+    "planted_reach3": _task(3, slack=False, excursion=REACH),
+    "planted_far3": _task(3, slack=False, excursion=REACH_FAR),
+}

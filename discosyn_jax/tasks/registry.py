@@ -1,7 +1,8 @@
 """The task registry: `make(name)` builds a task's environment, `make_envs(config)` those of a
-config's tasks. It knows environments only: the Trainer on them is assembled by
-discosyn_jax/assemble.py. Reached as `tasks.make`, ... through
-discosyn_jax/tasks/__init__.py."""
+config's tasks. Our tasks and a task of one's own are added alike, by `register`; a task
+declares its own settings (its fast physics, its scripted motion). It knows environments
+only: the Trainer on them is assembled by discosyn_jax/assemble.py. Reached as
+`tasks.make`, ... through discosyn_jax/tasks/__init__.py."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import dataclasses
 import importlib
 import importlib.util
 import pathlib
-from typing import Callable
+from typing import Any, Callable
 
 from discosyn_jax import quiet_mjx  # noqa: F401  (first: MJX imported quietly, before brax)
 from brax.envs.base import Env
@@ -25,118 +26,65 @@ from discosyn_jax.tasks.sets import TASK_SETS
 
 @dataclasses.dataclass(frozen=True)
 class Entry:
-  task: Callable[[TaskConfig], Task]  # for a pure-JAX env: the env's config, as it is
-  default_config: Callable[..., TaskConfig]
+  # the Task of a config; for an env built from its config alone: the config, as it is
+  task: Callable[[TaskConfig], Task]
+  default_config: Callable[[], Any]
   summary: str
   # what `make` builds around the task: the hand on a physics backend, or a pure-JAX env
   env: Callable[..., Env] = HandEnv
 
-
-def _planted(index: int, slack: bool, paid_within: float = 0.0, excursion: float = 0.0) -> Entry:
-  what = "only the error inside the span counts" if slack else "the whole error counts"
-  if paid_within:
-    what += f"; paid only within {paid_within:g} of a typical target"
-  summary = f"reach a posture in plane {index} of the planted 3-D span; {what}"
-  if excursion:
-    summary = (f"reach beyond {excursion:g} along the first axis of plane {index} of the "
-               "planted 3-D span; paid nothing short of it")
-  return Entry(lambda config: config,  # the env is built from the config itself
-               lambda **kw: planted.default_config(index=index, slack=slack, paid_within=paid_within,
-                                                   excursion=excursion, **kw),
-               summary, env=planted.PlantedEnv)
+  @property
+  def fast_physics(self) -> dict:
+    """The config fields the "fast" profile sets: the Task's own (Task.fast_physics); an env
+    built without a Task has no physics of ours to set."""
+    return dict(self.task.fast_physics) if self.env is HandEnv else {}
 
 
-# planted_found3: no reward until the error is below 0.7 of a typical target's size; the
-# initial decoder's noise (std 0.3 on 20 actuators) alone is larger, so the task is first
-# paid once the dense tasks have narrowed it (std ~0.2: a quarter of the steps at the target)
-PAID_WITHIN = 0.7
-# planted_reach3: paid only where the action reaches 1.0 along the task's direction: within
-# what plane 2's dense targets ask along it (up to 1.46; planes 0 and 1: 0.40, 0.91), so a
-# decoder serving the dense tasks reaches it; at the start 1.8-2.0 % of PPO's samples and
-# 0.1-8 % of the synergy preset's (seeds 0-2) reach it, set before any run (2026-12-06)
-REACH = 1.0
-# planted_far3: the same task reaching 1.4, near the largest the dense targets ask along its
-# direction (1.46), which a bounded z gives only near a corner of its box: at the start
-# 0.15 % of PPO's samples, 0-0.75 % of the synergy preset's. Set after planted_reach3 was
-# found at once by every synergy run (0.03-0.13 M env steps, 2026-12-06), before any run of it
-REACH_FAR = 1.4
-REGISTRY: dict[str, Entry] = {
-    "valve0": Entry(valve.Valve, lambda **kw: valve.default_config(arms=0, **kw),
-                    "turn a bare vertical stem counter-clockwise"),
-    "valve1": Entry(valve.Valve, lambda **kw: valve.default_config(arms=1, **kw),
-                    "turn a one-armed (L) valve counter-clockwise"),
-    "valve2": Entry(valve.Valve, lambda **kw: valve.default_config(arms=2, **kw),
-                    "turn a two-armed (T) valve counter-clockwise"),
-    "valve3": Entry(valve.Valve, lambda **kw: valve.default_config(arms=3, **kw),
-                    "turn a three-armed valve counter-clockwise"),
-    # task set #2 (with valve3)
-    "dice": Entry(dice.Dice, dice.default_config,
-                  "palm up: turn a free cube about the palm normal to a goal angle"),
-    "weight_pull": Entry(weight_pull.WeightPull, weight_pull.default_config,
-                         "lift a weight by pulling up the rope tied to it"),
-    "screw": Entry(screw.Screw, screw.default_config,
-                   "roll a horizontal screwdriver with the fingers to drive it in"),
-    # unseen tasks (learned with a frozen synergy decoder)
-    "valve_cylinder": Entry(valve.Valve, lambda **kw: valve.default_config(shape="wheel", **kw),
-                            "turn a round wheel valve counter-clockwise"),
-    "valve_cw": Entry(valve.Valve, lambda **kw: valve.default_config(
-                          arms=3, direction=-1.0, success_turn=1.2, **kw),
-                      "turn the three-armed valve clockwise"),
-    "screw_topdown": Entry(screw.Screw, lambda **kw: screw.default_config(topdown=True, **kw),
-                           "drive an upright screwdriver in, clockwise from above"),
-    # the dice as first specified: any axis, within 0.1 rad, no shaping (solved by no method)
-    "dice_full": Entry(dice.Dice, lambda **kw: dice.default_config(
-                           goal_axis="any", goal_min_angle=0.4, success_angle=0.1,
-                           progress_scale=0.0, success_bonus=0.0, **kw),
-                       "palm up: turn a free cube to a random orientation (any axis, 0.1 rad)"),
-    # the sparse goal valve, and its dense twin for debugging
-    "valve_goal": Entry(valve_goal.GoalValve, valve_goal.default_config,
-                        "turn the three-armed valve to a goal angle; reward 1 near it, else 0"),
-    "valve_goal_dense": Entry(valve_goal.GoalValve, lambda **kw: valve_goal.default_config(dense=True, **kw),
-                              "valve_goal with a dense reward 1 - |error| / pi (debugging)"),
-    # the planted-synergy test bed (pure JAX, discosyn_jax/tasks/planted.py): one span, a plane per task
-    **{f"planted{n}": _planted(n, slack=False) for n in range(4)},
-    **{f"planted_slack{n}": _planted(n, slack=True) for n in range(4)},
-    # a task of the bed that pays nothing until it is found (planted_found's fourth)
-    "planted_found3": _planted(3, slack=False, paid_within=PAID_WITHIN),
-    # a task of the bed paid only for an excursion (planted_reach's fourth)
-    "planted_reach3": _planted(3, slack=False, excursion=REACH),
-    "planted_far3": _planted(3, slack=False, excursion=REACH_FAR),
-}
-
-# The "fast" physics profile: each task's cheapest setting that stayed within the tolerances
-# of the reference (4 ms x 10) in studies/physics_study.py (docs/BENCHMARKS.md, "Physics
-# settings", 2026-12-02): 8 ms steps, the valves' contacts as stiff as at 4 ms (refsafe off;
-# the screws diverge or bounce so). A task not listed keeps the reference: weight_pull's rope
-# failed every cheaper setting, and the pure-JAX tasks have no physics.
-_EIGHT_MS = dict(n_substeps=5)
-_EIGHT_MS_STIFF = dict(n_substeps=5, refsafe=False)
-FAST: dict[str, dict] = {
-    **{name: _EIGHT_MS_STIFF for name in ("valve0", "valve1", "valve2", "valve3", "valve_cylinder",
-                                          "valve_cw", "valve_goal", "valve_goal_dense")},
-    **{name: _EIGHT_MS for name in ("dice", "dice_full", "screw", "screw_topdown")}}
+REGISTRY: dict[str, Entry] = {}
 
 
-
-def register(name: str, task: type[Task], default_config=None, summary: str = "",
-             env: Callable[..., Env] = HandEnv) -> str:
-  """Add a task under `name` (its config class's defaults unless `default_config` is given);
-  `tasks.make(name)` and `discosyn train --tasks NAME` then build it. Returns the name."""
-  if not (isinstance(task, type) and issubclass(task, Task)):
-    raise ValueError(f"task {name!r}: {task!r} is not a Task class (discosyn_jax.env.task.Task)")
-  missing = sorted(getattr(task, "__abstractmethods__", ()))
-  if missing:
-    raise ValueError(f"task {name!r}: {task.__name__} does not define {', '.join(missing)}")
-  new = Entry(task, default_config or task.config_class, summary or task.summary, env)
+def register(name: str, task, default_config: Callable[[], Any] | None = None,
+             summary: str = "") -> str:
+  """Add a task under `name`: the one path of our tasks and of a task of one's own alike;
+  `tasks.make(name)` and `discosyn train --tasks NAME` then build it. `task` is one of
+  - a Task class: the hand on a physics backend around it, its config `default_config()`
+    (its config class's defaults unless given); it declares its own fast physics and
+    scripted motion (Task.fast_physics, Task.motion);
+  - a Brax Env class built from its config alone, `task(config, backend=, hand=)`, given its
+    `default_config` (a pure-JAX env: the planted bed);
+  - a function of no arguments that returns an env, whatever backend, physics or hand is
+    asked for (registered whole: it has no settings).
+  Registering the same again is a no-op; another under a taken name is refused. Returns the
+  name."""
+  new = _entry(name, task, default_config, summary)
   if REGISTRY.get(name, new) != new:
     raise ValueError(f"a task named {name!r} is registered already")
   REGISTRY[name] = new
   return name
 
 
+def _entry(name: str, task, default_config, summary: str) -> Entry:
+  """`register`'s Entry for `task`, or one line saying what is wrong with it."""
+  if isinstance(task, type) and issubclass(task, Task):
+    missing = sorted(getattr(task, "__abstractmethods__", ()))
+    if missing:
+      raise ValueError(f"task {name!r}: {task.__name__} does not define {', '.join(missing)}")
+    return Entry(task, default_config or task.config_class, summary or task.summary)
+  if isinstance(task, type) and issubclass(task, Env):
+    if default_config is None:
+      raise ValueError(f"task {name!r}: an Env class is registered with its default_config")
+    return Entry(_as_is, default_config, summary, env=task)
+  if callable(task) and not isinstance(task, type):
+    if default_config is not None:
+      raise ValueError(f"task {name!r}: a function that makes an env has no default_config")
+    return Entry(_as_is, NoSettings, summary or f"{name}: an env of one's own", env=_Whole(task))
+  raise ValueError(f"task {name!r}: {task!r} is not a Task class (discosyn_jax.env.task.Task), "
+                   "an Env class or a function that makes an env")
+
+
 @dataclasses.dataclass(frozen=True)
 class NoSettings:
-  """The config of an environment registered whole (register_env): it has no settings."""
+  """The config of an environment registered whole: it has no settings."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -146,22 +94,15 @@ class _Whole:
   make_env: Callable[[], Env]
 
   def __call__(self, task, **_) -> Env:
-    return self.make_env()
+    env = self.make_env()
+    if not isinstance(env, Env):
+      raise ValueError(f"{getattr(self.make_env, '__name__', self.make_env)!r} returned "
+                       f"{type(env).__name__}, not an env")
+    return env
 
 
 def _as_is(config):
   return config
-
-
-def register_env(name: str, make_env: Callable[[], Env], summary: str = "") -> str:
-  """Add an environment of one's own under `name`, built by `make_env()` whatever the
-  backend, physics or hand asked for (a pure-JAX env: the tests' toy tasks). Registering the
-  same `make_env` again is a no-op; another under a taken name is refused."""
-  new = Entry(_as_is, NoSettings, summary or f"{name}: an env of one's own", env=_Whole(make_env))
-  if REGISTRY.get(name, new) != new:
-    raise ValueError(f"a task named {name!r} is registered already")
-  REGISTRY[name] = new
-  return name
 
 
 def load(spec: str) -> str:
@@ -239,11 +180,12 @@ def make_config(name: str, **overrides) -> TaskConfig:
 
 def physics_overrides(name: str, physics: str) -> dict:
   """The task config fields that physics profile `physics` (env/settings.py: PHYSICS) sets for task
-  `name`: none for "reference" (TaskConfig's own defaults: 4 ms x 10)."""
+  `name`: its own fast settings for "fast", none for "reference" (TaskConfig's own defaults:
+  4 ms x 10)."""
   if physics not in PHYSICS:
     raise ValueError(f"unknown physics {physics!r}; known: {', '.join(PHYSICS)}")
-  entry(name)
-  return dict(FAST.get(name, {})) if physics == "fast" else {}
+  fast = entry(name).fast_physics
+  return fast if physics == "fast" else {}
 
 
 def make(name: str, *, backend: str = "auto", physics: str = "fast", hand: str = hands.DEFAULT,
@@ -292,3 +234,14 @@ def make_envs(config) -> list[Env]:
 def names() -> tuple[str, ...]:
   """Every registered task's name, ours and those registered since."""
   return tuple(REGISTRY)
+
+
+def _register_ours() -> None:
+  """Our tasks, through `register` as a task of one's own: each family module lists its own
+  (TASKS: name -> task, default config, summary)."""
+  for family in (valve, dice, weight_pull, screw, valve_goal, planted):
+    for name, (task, default_config, summary) in family.TASKS.items():
+      register(name, task, default_config, summary)
+
+
+_register_ours()

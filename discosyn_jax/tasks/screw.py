@@ -20,11 +20,13 @@ that set it).
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import jax
 import jax.numpy as jnp
 import mujoco
 
+from discosyn_jax.env import scripted
 from discosyn_jax.env.physics import PhysicsView
 from discosyn_jax.env.task import Info, Task, TaskConfig
 from discosyn_jax.tasks import common
@@ -47,6 +49,7 @@ def default_config(**overrides) -> ScrewConfig:
 
 
 class Screw(Task):
+  fast_physics = common.EIGHT_MS
 
   def __init__(self, config: ScrewConfig):
     super().__init__(config)
@@ -55,6 +58,14 @@ class Screw(Task):
     common.require(0 < config.success_depth < 0.04,
                    f"success_depth must lie in (0, 0.04) m, the slide's travel, not {config.success_depth}")
     self.scene = "screw_topdown" if config.topdown else "screw"
+
+  @property
+  def motion(self) -> scripted.Motion:
+    """screw: the fingers' roll; screw_topdown: the clockwise sweep with the fingers dipped
+    deeper, around the handle (leap16's sweep is the valves' either way)."""
+    if self.config.topdown:
+      return scripted.Motion(options=dict(dip=0.5, direction=-1.0))
+    return scripted.Motion(scripted.finger_roll)
 
   def edit_spec(self, spec: mujoco.MjSpec) -> None:
     joint = spec.joint("screw")
@@ -91,3 +102,12 @@ class Screw(Task):
 
   def success(self, view: PhysicsView, info: Info) -> jax.Array:
     return (self.depth(view) >= self.config.success_depth).astype(jnp.float32)
+
+
+# this family's tasks: the registry gives each to `register` (task, default config, summary)
+TASKS = {
+    "screw": (Screw, default_config, "roll a horizontal screwdriver with the fingers to drive it in"),
+    # unseen (learned with a frozen synergy decoder)
+    "screw_topdown": (Screw, functools.partial(default_config, topdown=True),
+                      "drive an upright screwdriver in, clockwise from above"),
+}

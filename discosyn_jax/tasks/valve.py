@@ -18,12 +18,14 @@ clockwise by 0.25 rad on average, and met pi/4 clockwise in 22 % of episodes.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import jax
 import jax.numpy as jnp
 import mujoco
 
+from discosyn_jax.env import scripted
 from discosyn_jax.env.physics import PhysicsView
 from discosyn_jax.env.task import Info, Task, TaskConfig
 from discosyn_jax.tasks import common
@@ -49,6 +51,7 @@ def default_config(**overrides) -> ValveConfig:
 
 
 class Valve(Task):
+  fast_physics = common.EIGHT_MS_STIFF
 
   def __init__(self, config: ValveConfig):
     super().__init__(config)
@@ -57,6 +60,12 @@ class Valve(Task):
     common.require(config.direction in (1.0, -1.0), f"direction is +1 or -1, not {config.direction}")
     common.require_hinge(config)
     self.scene = "valve_cylinder" if config.shape == "wheel" else f"valve{config.arms}"
+
+  @property
+  def motion(self) -> scripted.Motion:
+    """The grasp-and-sweep in the valve's direction, on either hand (valve_cw: its mirror)."""
+    direction = self.config.direction
+    return scripted.Motion(options=dict(direction=direction), leap_direction=direction)
 
   def edit_spec(self, spec: mujoco.MjSpec) -> None:
     joint = spec.joint("valve")
@@ -92,3 +101,22 @@ class Valve(Task):
   def success(self, view: PhysicsView, info: Info) -> jax.Array:
     turned = self.config.direction * (self.angle(view) - info["start_angle"])
     return (turned >= self.config.success_turn).astype(jnp.float32)
+
+
+# this family's tasks: the registry gives each to `register` (task, default config, summary),
+# the path a task of one's own takes
+TASKS = {
+    "valve0": (Valve, functools.partial(default_config, arms=0),
+               "turn a bare vertical stem counter-clockwise"),
+    "valve1": (Valve, functools.partial(default_config, arms=1),
+               "turn a one-armed (L) valve counter-clockwise"),
+    "valve2": (Valve, functools.partial(default_config, arms=2),
+               "turn a two-armed (T) valve counter-clockwise"),
+    "valve3": (Valve, functools.partial(default_config, arms=3),
+               "turn a three-armed valve counter-clockwise"),
+    # unseen tasks (learned with a frozen synergy decoder)
+    "valve_cylinder": (Valve, functools.partial(default_config, shape="wheel"),
+                       "turn a round wheel valve counter-clockwise"),
+    "valve_cw": (Valve, functools.partial(default_config, arms=3, direction=-1.0, success_turn=1.2),
+                 "turn the three-armed valve clockwise"),
+}

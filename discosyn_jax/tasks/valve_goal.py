@@ -17,6 +17,7 @@ on average (p99 1.17 rad): with goals on both sides it met 6 % of them by drift
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import jax
@@ -40,7 +41,7 @@ def default_config(**overrides) -> GoalValveConfig:
   return GoalValveConfig(**overrides)
 
 
-class GoalValve(valve.Valve):
+class GoalValve(valve.Valve):  # the valves' fast physics and sweep
 
   def __init__(self, config: GoalValveConfig):
     super().__init__(config)
@@ -74,3 +75,13 @@ class GoalValve(valve.Valve):
 
   def success(self, view: PhysicsView, info: Info) -> jax.Array:
     return self._within(view, info)
+
+
+# this family's tasks: the registry gives each to `register` (task, default config, summary)
+TASKS = {
+    "valve_goal": (GoalValve, default_config,
+                   "turn the three-armed valve to a goal angle; reward 1 near it, else 0"),
+    # its dense twin, for debugging
+    "valve_goal_dense": (GoalValve, functools.partial(default_config, dense=True),
+                         "valve_goal with a dense reward 1 - |error| / pi (debugging)"),
+}
