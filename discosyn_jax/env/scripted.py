@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from discosyn_jax.checks import BadInput
 from discosyn_jax.env import hands
 
 # our hand's actuators in action order, by joint name ("A_WRJ1" -> "WRJ1")
@@ -95,7 +96,7 @@ def for_task(name: str, steps: int, dt: float, hand: str = hands.DEFAULT) -> np.
   if hand == "leap16":
     return leap_sweep(steps, dt, direction=-1.0 if name == "valve_cw" else 1.0)
   if hand != "shadow20":
-    raise ValueError(f"no scripted motions for hand {hand}: only for {', '.join(hands.SHIPPED)}")
+    raise BadInput(f"no scripted motions for hand {hand}: only for {', '.join(hands.SHIPPED)}")
   if name == "weight_pull":
     return hook_and_lift(steps, dt)
   if name == "screw":

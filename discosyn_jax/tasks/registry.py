@@ -14,6 +14,7 @@ from typing import Callable
 from discosyn_jax import quiet_mjx  # noqa: F401  (first: MJX imported quietly, before brax)
 from brax.envs.base import Env
 
+from discosyn_jax.checks import BadInput
 from discosyn_jax.env.settings import PHYSICS
 from discosyn_jax.env import hands
 from discosyn_jax.env.hand_env import HandEnv
@@ -123,13 +124,13 @@ def register(name: str, task: type[Task], default_config=None, summary: str = ""
   """Add a task under `name` (its config class's defaults unless `default_config` is given);
   `tasks.make(name)` and `discosyn train --tasks NAME` then build it. Returns the name."""
   if not (isinstance(task, type) and issubclass(task, Task)):
-    raise ValueError(f"task {name!r}: {task!r} is not a Task class (discosyn_jax.env.task.Task)")
+    raise BadInput(f"task {name!r}: {task!r} is not a Task class (discosyn_jax.env.task.Task)")
   missing = sorted(getattr(task, "__abstractmethods__", ()))
   if missing:
-    raise ValueError(f"task {name!r}: {task.__name__} does not define {', '.join(missing)}")
+    raise BadInput(f"task {name!r}: {task.__name__} does not define {', '.join(missing)}")
   new = Entry(task, default_config or task.config_class, summary or task.summary, env)
   if REGISTRY.get(name, new) != new:
-    raise ValueError(f"a task named {name!r} is registered already")
+    raise BadInput(f"a task named {name!r} is registered already")
   REGISTRY[name] = new
   return name
 
@@ -159,7 +160,7 @@ def register_env(name: str, make_env: Callable[[], Env], summary: str = "") -> s
   same `make_env` again is a no-op; another under a taken name is refused."""
   new = Entry(_as_is, NoSettings, summary or f"{name}: an env of one's own", env=_Whole(make_env))
   if REGISTRY.get(name, new) != new:
-    raise ValueError(f"a task named {name!r} is registered already")
+    raise BadInput(f"a task named {name!r} is registered already")
   REGISTRY[name] = new
   return name
 
@@ -170,14 +171,14 @@ def load(spec: str) -> str:
   path made absolute, so that a run's config names it wherever the run is read again."""
   where, _, attr = spec.rpartition(":")
   if not where or not attr:
-    raise ValueError(f"a task of one's own is FILE.py:CLASS or MODULE:CLASS, not {spec!r}")
+    raise BadInput(f"a task of one's own is FILE.py:CLASS or MODULE:CLASS, not {spec!r}")
   if where.endswith(".py"):
     path = pathlib.Path(where).expanduser().resolve()
     name = f"{path}:{attr}"
     if name in REGISTRY:
       return name
     if not path.is_file():
-      raise ValueError(f"no task file {where}")
+      raise BadInput(f"no task file {where}")
     module_spec = importlib.util.spec_from_file_location(f"discosyn_task_{path.stem}", path)
     module = importlib.util.module_from_spec(module_spec)
     try:
@@ -191,9 +192,9 @@ def load(spec: str) -> str:
     try:
       module = importlib.import_module(where)
     except ImportError as err:
-      raise ValueError(f"task {spec!r}: cannot import {where}: {err}") from None
+      raise BadInput(f"task {spec!r}: cannot import {where}: {err}") from None
   if not hasattr(module, attr):
-    raise ValueError(f"{where} defines no {attr}")
+    raise BadInput(f"{where} defines no {attr}")
   return register(name, getattr(module, attr))
 
 
@@ -220,7 +221,7 @@ def entry(name: str) -> Entry:
     loaded = load(name)  # a file named relative to the working folder: known by both names
     REGISTRY.setdefault(name, REGISTRY[loaded])
   if name not in REGISTRY:
-    raise ValueError(f"unknown task {name!r}; known tasks: {', '.join(REGISTRY)}")
+    raise BadInput(f"unknown task {name!r}; known tasks: {', '.join(REGISTRY)}")
   return REGISTRY[name]
 
 
@@ -229,19 +230,19 @@ def make_config(name: str, **overrides) -> TaskConfig:
   fields = {f.name for f in dataclasses.fields(defaults)}
   unknown = sorted(set(overrides) - fields)
   if unknown:
-    raise ValueError(f"task {name!r} has no setting {', '.join(unknown)}; "
-                     f"its settings: {', '.join(sorted(fields))}")
+    raise BadInput(f"task {name!r} has no setting {', '.join(unknown)}; "
+                   f"its settings: {', '.join(sorted(fields))}")
   try:
     return dataclasses.replace(defaults, **overrides)
   except ValueError as err:
-    raise ValueError(f"task {name!r}: {err}") from None
+    raise BadInput(f"task {name!r}: {err}") from None
 
 
 def physics_overrides(name: str, physics: str) -> dict:
   """The task config fields that physics profile `physics` (env/settings.py: PHYSICS) sets for task
   `name`: none for "reference" (TaskConfig's own defaults: 4 ms x 10)."""
   if physics not in PHYSICS:
-    raise ValueError(f"unknown physics {physics!r}; known: {', '.join(PHYSICS)}")
+    raise BadInput(f"unknown physics {physics!r}; known: {', '.join(PHYSICS)}")
   entry(name)
   return dict(FAST.get(name, {})) if physics == "fast" else {}
 
@@ -259,7 +260,7 @@ def make(name: str, *, backend: str = "auto", physics: str = "fast", hand: str =
   try:
     task = entry(name).task(config)
   except ValueError as err:
-    raise ValueError(f"task {name!r}: {err}") from None
+    raise BadInput(f"task {name!r}: {err}") from None
   return entry(name).env(task, backend=backend, hand=hand)
 
 
@@ -274,8 +275,8 @@ def expand(names) -> list[str]:
     elif ":" in name or name.endswith(".py"):  # a task of one's own
       out.append(load(name))
     else:
-      raise ValueError(f"unknown task or task set {name!r}; tasks: {', '.join(REGISTRY)}; "
-                       f"sets: {', '.join(TASK_SETS)}")
+      raise BadInput(f"unknown task or task set {name!r}; tasks: {', '.join(REGISTRY)}; "
+                     f"sets: {', '.join(TASK_SETS)}")
   return out
 
 
