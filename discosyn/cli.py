@@ -1,6 +1,7 @@
 """The `discosyn` command: train, eval, synergies, render, experiment, keep, report, bench,
 demo, tasks, render-scenes, upgrade; its flags, and how it ends (one line and exit 2 for bad input,
-128 + the signal for Ctrl-C / SIGTERM). The commands themselves are in commands.py."""
+checks.BadInput; a bug's traceback and a line that says it is one, exit 1; 128 + the signal for
+Ctrl-C / SIGTERM). The commands themselves are in commands.py."""
 
 from __future__ import annotations
 
@@ -342,10 +343,14 @@ TRACEBACK = "DISCOSYN_TRACEBACK"
 
 
 def _refused(err: Exception) -> int:
-  """The one line and exit status of a command that could not do its work."""
+  """The one line and exit status of a command that could not do its work; for a bug, its
+  traceback and a line that says so."""
   line, code = _one_line(err)
-  if line is None:  # not a failure we know: a bug, its traceback
-    raise err
+  if line is None:  # not bad input nor a failure we know: a bug in discosyn
+    traceback.print_exception(err)
+    print("discosyn: this is a bug in discosyn, not in what it was given: please report it "
+          "with the command and the traceback above", file=sys.stderr)
+    return 1
   if os.environ.get(TRACEBACK) == "1":
     traceback.print_exception(err)
   elif _is_task_error(err):  # the task's own code raised: how to see the rest
@@ -355,9 +360,11 @@ def _refused(err: Exception) -> int:
 
 
 def _one_line(err: Exception) -> tuple[str | None, int]:
-  from discosyn_jax.training.loop import TaskNotFinite, TrainingDiverged
+  from discosyn_jax.checks import BadInput
+  from discosyn_jax.training.loop import TaskNotFinite, TrainingDiverged, WriteFailed
 
-  if isinstance(err, (commands.UsageError, ValueError, TaskNotFinite)):
+  # WriteFailed: the run's disk or folder, not its input, yet one line as an OSError
+  if isinstance(err, (BadInput, TaskNotFinite, WriteFailed)):
     return f"discosyn: error: {err}", 2
   if isinstance(err, OSError):  # a file that cannot be read or written: a path, a full disk
     return (f"discosyn: error: {err.filename + ': ' if err.filename else ''}"

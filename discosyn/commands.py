@@ -7,11 +7,12 @@ import pathlib
 import shlex
 import time
 
+from discosyn_jax.checks import BadInput
 from discosyn_jax.run import layout
 
 
-class UsageError(Exception):
-  """Bad input: reported as one line, exit status 2."""
+class UsageError(BadInput):
+  """A flag or argument of a command that cannot be used: one line, exit status 2."""
 
 
 def cmd_tasks(args) -> None:
@@ -157,7 +158,7 @@ def cmd_train(args) -> None:
   config = train_config(args, base)
   devices.mesh_for(config, args.devices)  # a bad device count fails before the run directory
   if args.stop_at is not None and not 0 <= args.stop_at <= 1:
-    raise ValueError(f"--stop-at is a success rate in [0, 1], not {args.stop_at}")
+    raise UsageError(f"--stop-at is a success rate in [0, 1], not {args.stop_at}")
   print(f"run directory: {out}")
   done = assemble.train(config, out, resume=args.resume, force=args.force,
                         progress=not args.no_progress, stop_at=args.stop_at, devices=args.devices)

@@ -17,8 +17,10 @@ synergies started in the reward prior, z bounded, on task set #1), preset, PRESE
 a decoder kind of one's own: DecoderKind, register_decoder (discosyn_jax/decoders.py).
 Tasks: Task, TaskConfig, TASK_SETS, task_names, make_env, register_task, load_task.
 Runs: train, evaluate, read_run, Run. Synergies: Synergies, shipped_synergies, synergy_env
-(docs/TAKE_HOME.md). setup_jax: MJX imported quietly, the compile cache on, and what Brax's
-own trainers still call of JAX given back where JAX removed it.
+(docs/TAKE_HOME.md). BadInput: the ValueError that every check of what a user gave raises
+(one line: which input and why); any other exception is a bug. setup_jax: MJX imported
+quietly, the compile cache on, and what Brax's own trainers still call of JAX given back
+where JAX removed it.
 Every name loads on first use, so that `import discosyn_jax` itself imports no JAX.
 """
 
@@ -74,6 +76,7 @@ _API = {
     # not ds.synergies: that is the subpackage discosyn_jax.synergies once it is imported
     "shipped_synergies": ("discosyn_jax.synergies.artefact", "shipped"),
     "synergy_env": ("discosyn_jax.synergies.action_space", "synergy_env"),
+    "BadInput": ("discosyn_jax.checks", "BadInput"),
 }
 __all__ = [*_API, "setup_jax"]
 

@@ -1,5 +1,5 @@
 """Checks of input that the configs, the CLI and the environment variables share: each
-raises ValueError with one line that names the setting, before anything is built or written.
+raises BadInput with one line that names the setting, before anything is built or written.
 """
 
 from __future__ import annotations
@@ -14,6 +14,13 @@ import typing
 # evaluation draws with seed + 1
 MAX_SEED = 2**32 - 2
 _PLURALS = {str: "strings", int: "whole numbers", float: "finite numbers", bool: "true/false values"}
+
+
+class BadInput(ValueError):
+  """What a user gave (a config field, a flag, a file, a task, a plan, a hand, an environment
+  variable, a name) cannot be used: one line that says which and why. The command prints it
+  alone, exit status 2; any other exception is a bug in discosyn. A ValueError, so that
+  `except ValueError` catches it too."""
 
 
 def shortened(text: str, limit: int = 40) -> str:
@@ -43,19 +50,19 @@ def _kind_problem(kind, value) -> str | None:
 
 
 def fields(obj) -> None:
-  """Raise ValueError naming the first field of the dataclass `obj` whose value does not
+  """Raise BadInput naming the first field of the dataclass `obj` whose value does not
   have its declared type (numbers finite, whole numbers whole, flags true or false)."""
   hints = typing.get_type_hints(type(obj))
   for field in dataclasses.fields(obj):
     value = getattr(obj, field.name)
     problem = _kind_problem(hints.get(field.name), value)
     if problem:
-      raise ValueError(f"{field.name} must be {problem}, not {value!r}")
+      raise BadInput(f"{field.name} must be {problem}, not {value!r}")
 
 
 def seed(value: int, name: str = "seed") -> int:
   if not isinstance(value, numbers.Integral) or not 0 <= value <= MAX_SEED:
-    raise ValueError(f"{name} must be a whole number between 0 and {MAX_SEED}, not {value!r}")
+    raise BadInput(f"{name} must be a whole number between 0 and {MAX_SEED}, not {value!r}")
   return int(value)
 
 
@@ -69,8 +76,8 @@ def env_int(name: str, default: int, minimum: int = 1) -> int:
   except ValueError:
     value = None
   if value is None or value < minimum:
-    raise ValueError(f"environment variable {name} must be a whole number of at least {minimum}, "
-                     f"not {text!r}")
+    raise BadInput(f"environment variable {name} must be a whole number of at least {minimum}, "
+                   f"not {text!r}")
   return value
 
 
@@ -110,9 +117,9 @@ def memory(config, envs) -> None:
   """Refuse a config whose envs cannot fit in memory, before it fails deep in an allocation."""
   needed, have = memory_needed(config, envs), memory_available()
   if needed > have:
-    raise ValueError(f"{len(envs)} task(s) x {config.num_envs} envs (and {config.eval_envs} "
-                     f"evaluation episodes) need at least {needed / 2**30:,.1f} GiB, more than the "
-                     f"{have / 2**30:,.1f} GiB here; lower num_envs or eval_envs")
+    raise BadInput(f"{len(envs)} task(s) x {config.num_envs} envs (and {config.eval_envs} "
+                   f"evaluation episodes) need at least {needed / 2**30:,.1f} GiB, more than the "
+                   f"{have / 2**30:,.1f} GiB here; lower num_envs or eval_envs")
 
 
 _JAX_ENVIRONMENT_CHECKED: set[tuple[str, str]] = set()
@@ -139,8 +146,8 @@ def jax_environment(own_xla_flags: str) -> None:
     unknown = [line.split("XLA_FLAGS:", 1)[1].strip() for line in probe.stderr.splitlines()
                if "Unknown flag" in line and "XLA_FLAGS:" in line]
     if probe.returncode and unknown:
-      raise ValueError(f"environment variable XLA_FLAGS holds a flag XLA does not know: "
-                       f"{unknown[0]}")
+      raise BadInput(f"environment variable XLA_FLAGS holds a flag XLA does not know: "
+                     f"{unknown[0]}")
   if platforms.strip():
     import jax
 
@@ -148,5 +155,5 @@ def jax_environment(own_xla_flags: str) -> None:
       jax.devices()
     except RuntimeError as err:
       reason = str(err).splitlines()[0].split(" (set JAX_PLATFORMS")[0]
-      raise ValueError(f"environment variable JAX_PLATFORMS={platforms!r}: {reason}") from None
+      raise BadInput(f"environment variable JAX_PLATFORMS={platforms!r}: {reason}") from None
   _JAX_ENVIRONMENT_CHECKED.add((platforms, flags))

@@ -17,6 +17,7 @@ import tokenize
 from typing import Any
 
 from discosyn_jax import atomic, checks, decoders
+from discosyn_jax.checks import BadInput
 from discosyn_jax.env.settings import PHYSICS  # the env's choice a config names
 
 # the priors a linear decoder may start from (decoder_init): what the pushed actions are read
@@ -218,101 +219,101 @@ class TrainConfig:
     return len(self.tasks) * self.num_envs * self.unroll_length
 
   def validate(self) -> "TrainConfig":
-    """Raise ValueError naming the first impossible setting; return self."""
+    """Raise BadInput naming the first impossible setting; return self."""
     checks.fields(self)  # types first: a string or NaN fails here, not in the checks below
     checks.seed(self.seed)
     if not self.tasks:
-      raise ValueError("no tasks given")
+      raise BadInput("no tasks given")
     if len(set(self.tasks)) != len(self.tasks):
-      raise ValueError(f"a task is listed twice: {', '.join(self.tasks)}")
+      raise BadInput(f"a task is listed twice: {', '.join(self.tasks)}")
     if not self.hand:
-      raise ValueError("no hand given")
+      raise BadInput("no hand given")
     kind = decoders.kind(self.decoder)  # an unknown name fails here
     if kind.full_action:
       if self.alpha2 or self.alpha3:
-        raise ValueError("the identity decoder (full-action PPO) has no discriminator or decoder "
-                         "noise: set alpha2 = alpha3 = 0")
+        raise BadInput("the identity decoder (full-action PPO) has no discriminator or decoder "
+                       "noise: set alpha2 = alpha3 = 0")
     elif not 1 <= self.n_synergies <= 20:
-      raise ValueError(f"the synergy count must be between 1 and 20, not {self.n_synergies}")
+      raise BadInput(f"the synergy count must be between 1 and 20, not {self.n_synergies}")
     if self.own_synergies:
       if kind.full_action:
-        raise ValueError("the identity decoder (full-action PPO) has no room for a task's own "
-                         "synergies: its heads choose every action; set own_synergies = 0")
+        raise BadInput("the identity decoder (full-action PPO) has no room for a task's own "
+                       "synergies: its heads choose every action; set own_synergies = 0")
       if not 1 <= self.n_synergies + self.own_synergies <= 20:
-        raise ValueError(f"shared plus own synergies must be at most 20, not "
-                         f"{self.n_synergies} + {self.own_synergies}")
+        raise BadInput(f"shared plus own synergies must be at most 20, not "
+                       f"{self.n_synergies} + {self.own_synergies}")
     if self.task_posture and kind.full_action:
-      raise ValueError("the identity decoder (full-action PPO) has no room for a task posture: "
-                       "its heads choose every action; set task_posture = false")
+      raise BadInput("the identity decoder (full-action PPO) has no room for a task posture: "
+                     "its heads choose every action; set task_posture = false")
     if self.discriminator_target not in DISCRIMINATOR_TARGETS:
-      raise ValueError(f"unknown discriminator_target {self.discriminator_target!r}; known: "
-                       f"{', '.join(DISCRIMINATOR_TARGETS)}")
+      raise BadInput(f"unknown discriminator_target {self.discriminator_target!r}; known: "
+                     f"{', '.join(DISCRIMINATOR_TARGETS)}")
     if self.decoder_init not in DECODER_INITS:
-      raise ValueError(f"unknown decoder_init {self.decoder_init!r}; known: {', '.join(DECODER_INITS)}")
+      raise BadInput(f"unknown decoder_init {self.decoder_init!r}; known: {', '.join(DECODER_INITS)}")
     if self.decoder_init in PRIORS and (not kind.linear or self.decoder_from):
-      raise ValueError(f"the {self.decoder_init} prior starts a linear decoder of its own: "
-                       "decoder linear, no decoder_from")
+      raise BadInput(f"the {self.decoder_init} prior starts a linear decoder of its own: "
+                     "decoder linear, no decoder_from")
     if self.decoder_from and kind.full_action:
-      raise ValueError("the identity decoder (full-action PPO) cannot take a decoder_from")
+      raise BadInput("the identity decoder (full-action PPO) cannot take a decoder_from")
     if self.freeze_decoder and (self.decoder_weight_decay or self.decoder_weight_decay_steps):
-      raise ValueError("a frozen decoder is not decayed: set decoder_weight_decay = 0 and "
-                       "decoder_weight_decay_steps = 0")
+      raise BadInput("a frozen decoder is not decayed: set decoder_weight_decay = 0 and "
+                     "decoder_weight_decay_steps = 0")
     if self.decoder_weight_decay_steps and not self.decoder_weight_decay:
-      raise ValueError("decoder_weight_decay_steps anneals a decoder_weight_decay: set one")
+      raise BadInput("decoder_weight_decay_steps anneals a decoder_weight_decay: set one")
     if self.bonus_cap and kind.full_action:
-      raise ValueError("the identity decoder (full-action PPO) has no discriminator bonus to cap: "
-                       "set bonus_cap = false")
+      raise BadInput("the identity decoder (full-action PPO) has no discriminator bonus to cap: "
+                     "set bonus_cap = false")
     if self.task_noise and (kind.full_action or not self.decoder_noise):
-      raise ValueError("task_noise gives each task its own decoder noise: it needs a decoder "
-                       "with noise (not identity, decoder_noise true)")
+      raise BadInput("task_noise gives each task its own decoder noise: it needs a decoder "
+                     "with noise (not identity, decoder_noise true)")
     if not self.decoder_noise and self.alpha3:
-      raise ValueError("a noiseless decoder (decoder_noise false) has no entropy: set alpha3 = 0")
+      raise BadInput("a noiseless decoder (decoder_noise false) has no entropy: set alpha3 = 0")
     if self.physics not in PHYSICS:
-      raise ValueError(f"unknown physics {self.physics!r}; known: {', '.join(PHYSICS)}")
+      raise BadInput(f"unknown physics {self.physics!r}; known: {', '.join(PHYSICS)}")
     positive = ("num_envs", "unroll_length", "num_minibatches", "update_epochs", "steps",
                 "eval_envs", "keep_checkpoints")
     for name in positive:
       if getattr(self, name) < 1:
-        raise ValueError(f"{name} must be at least 1, not {getattr(self, name)}")
+        raise BadInput(f"{name} must be at least 1, not {getattr(self, name)}")
     if self.steps > MAX_STEPS:
-      raise ValueError(f"steps must be at most {MAX_STEPS}, not {self.steps}")
+      raise BadInput(f"steps must be at most {MAX_STEPS}, not {self.steps}")
     for name in ("own_synergies", "eval_every", "checkpoint_every", "alpha1", "alpha2", "alpha3", "value_coef",
                  "decoder_weight_decay", "decoder_weight_decay_steps", "residual_ramp",
                  "residual_start", "closing_episodes", "z_std_floor"):
       if getattr(self, name) < 0:
-        raise ValueError(f"{name} must not be negative, not {getattr(self, name)}")
+        raise BadInput(f"{name} must not be negative, not {getattr(self, name)}")
     for name in ("policy_hidden", "value_hidden", "decoder_hidden", "discriminator_hidden"):
       if any(width < 1 for width in getattr(self, name)):
-        raise ValueError(f"the layer widths of {name} must be at least 1, not {getattr(self, name)}")
+        raise BadInput(f"the layer widths of {name} must be at least 1, not {getattr(self, name)}")
     samples = self.num_envs * self.unroll_length
     if samples % self.num_minibatches:
-      raise ValueError(f"num_envs x unroll_length = {samples} does not split into "
-                       f"{self.num_minibatches} minibatches")
+      raise BadInput(f"num_envs x unroll_length = {samples} does not split into "
+                     f"{self.num_minibatches} minibatches")
     if not 0 < self.discount <= 1 or not 0 <= self.gae_lambda <= 1:
-      raise ValueError("discount must be in (0, 1] and gae_lambda in [0, 1]")
+      raise BadInput("discount must be in (0, 1] and gae_lambda in [0, 1]")
     for name in ("init_z_std", "init_action_std", "init_residual_std", "learning_rate",
                  "discriminator_learning_rate", "clip_epsilon", "max_grad_norm", "reward_scaling"):
       if getattr(self, name) <= 0:
-        raise ValueError(f"{name} must be positive, not {getattr(self, name)}")
+        raise BadInput(f"{name} must be positive, not {getattr(self, name)}")
     self._check_residual()
     return self
 
   def _check_residual(self) -> None:
     if not 0 <= self.residual <= 1:
-      raise ValueError(f"residual (the cap of the residual's weight) must be between 0 and 1, "
-                       f"not {self.residual}")
+      raise BadInput(f"residual (the cap of the residual's weight) must be between 0 and 1, "
+                     f"not {self.residual}")
     if self.residual_start + self.residual_ramp > 1:
-      raise ValueError(f"residual_start + residual_ramp are shares of the run: their sum must be "
-                       f"at most 1, not {self.residual_start + self.residual_ramp:g}")
+      raise BadInput(f"residual_start + residual_ramp are shares of the run: their sum must be "
+                     f"at most 1, not {self.residual_start + self.residual_ramp:g}")
     if not self.residual:
       if self.residual_ramp or self.residual_start:
-        raise ValueError("residual_ramp and residual_start schedule a residual: set residual")
+        raise BadInput("residual_ramp and residual_start schedule a residual: set residual")
     elif self.kind.full_action:
-      raise ValueError("the identity decoder (full-action PPO) has no room for a residual: its "
-                       "heads choose every action; set residual = 0")
+      raise BadInput("the identity decoder (full-action PPO) has no room for a residual: its "
+                     "heads choose every action; set residual = 0")
     elif not self.decoder_noise:
-      raise ValueError("a residual explores with the decoder's noise: a noiseless decoder "
-                       "(decoder_noise false) leaves it none; set residual = 0")
+      raise BadInput("a residual explores with the decoder's noise: a noiseless decoder "
+                     "(decoder_noise false) leaves it none; set residual = 0")
 
   def to_dict(self) -> dict[str, Any]:
     return dataclasses.asdict(self)
@@ -323,14 +324,14 @@ class TrainConfig:
     values = renamed(values)
     unknown = sorted(set(values) - set(fields))
     if unknown:
-      raise ValueError(f"unknown config field(s): {', '.join(unknown)}")
+      raise BadInput(f"unknown config field(s): {', '.join(unknown)}")
     missing = [name for name in fields if name not in values]
     if missing:
-      raise ValueError(f"missing config field(s): {', '.join(missing)}")
+      raise BadInput(f"missing config field(s): {', '.join(missing)}")
     init = values["decoder_init"]
     if init == GIVEN_START:
       if not values["decoder_from"]:
-        raise ValueError(f"decoder_init is {GIVEN_START}, but no decoder_from is given")
+        raise BadInput(f"decoder_init is {GIVEN_START}, but no decoder_from is given")
       init = "random"
     values = {**values, "decoder_init": OLD_STARTS.get(init, init)}
     # JSON has no tuples
@@ -353,7 +354,7 @@ def renamed(values: dict[str, Any]) -> dict[str, Any]:
       steps = values.get("steps")
       count = values.pop(old)
       if not isinstance(steps, int) or steps < 1 or not isinstance(count, int):
-        raise ValueError(f"{old} = {count!r} cannot become a share of steps = {steps!r}")
+        raise BadInput(f"{old} = {count!r} cannot become a share of steps = {steps!r}")
       values[new] = count / steps
   return values
 
@@ -376,14 +377,14 @@ def save(config: TrainConfig, path) -> None:
 
 
 def load(path) -> TrainConfig:
-  """The checked config in the file at `path`; ValueError naming the file and the field."""
+  """The checked config in the file at `path`; BadInput naming the file and the field."""
   try:
     with open(path) as f:
       values = json.load(f)
   except json.JSONDecodeError as err:
-    raise ValueError(f"malformed config file {path}: {err}") from None
+    raise BadInput(f"malformed config file {path}: {err}") from None
   if not isinstance(values, dict):
-    raise ValueError(f"malformed config file {path}: not a JSON object")
+    raise BadInput(f"malformed config file {path}: not a JSON object")
   try:
     return TrainConfig.from_dict(values).validate()
   except (TypeError, ValueError) as err:
@@ -391,7 +392,7 @@ def load(path) -> TrainConfig:
     hint = (f"; a run of an older release: `discosyn upgrade {pathlib.Path(path).parent}` adds "
             f"{', '.join(f'{k} = {json.dumps(ADDED[k])}' for k in older)}, as it ran"
             if older and "missing" in str(err) else "")
-    raise ValueError(f"config file {path}: {err}{hint}") from None
+    raise BadInput(f"config file {path}: {err}{hint}") from None
 
 
 def upgrade(path) -> list[str]:
@@ -401,15 +402,15 @@ def upgrade(path) -> list[str]:
   try:
     values = json.loads(pathlib.Path(path).read_text())
   except json.JSONDecodeError as err:
-    raise ValueError(f"malformed config file {path}: {err}") from None
+    raise BadInput(f"malformed config file {path}: {err}") from None
   if not isinstance(values, dict):
-    raise ValueError(f"malformed config file {path}: not a JSON object")
+    raise BadInput(f"malformed config file {path}: not a JSON object")
   renames = [old for old in RENAMED if old in values]
   upgraded, added = with_added(values)
   try:  # the rest must be whole already
     TrainConfig.from_dict(upgraded).validate()
   except (TypeError, ValueError) as err:
-    raise ValueError(f"config file {path}: {err}") from None
+    raise BadInput(f"config file {path}: {err}") from None
   if added or renames:  # in the order of today's fields, as a new run writes them
     order = [f.name for f in dataclasses.fields(TrainConfig)]
     upgraded = {k: upgraded[k] for k in sorted(upgraded, key=order.index)}

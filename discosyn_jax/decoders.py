@@ -10,6 +10,8 @@ from __future__ import annotations
 import dataclasses
 from typing import Any, Callable
 
+from discosyn_jax.checks import BadInput
+
 
 @dataclasses.dataclass(frozen=True)
 class DecoderKind:
@@ -32,8 +34,8 @@ class DecoderKind:
 
   def __post_init__(self):
     if self.full_action != (self.build is None):
-      raise ValueError(f"decoder kind {self.name!r}: a kind builds a decoder unless the heads "
-                       "choose the full action")
+      raise BadInput(f"decoder kind {self.name!r}: a kind builds a decoder unless the heads "
+                     "choose the full action")
 
 
 KINDS: dict[str, DecoderKind] = {}
@@ -42,9 +44,9 @@ KINDS: dict[str, DecoderKind] = {}
 def register(kind: DecoderKind) -> DecoderKind:
   """Add a kind; its name and its letter each name one kind."""
   if kind.name in KINDS:
-    raise ValueError(f"a decoder kind named {kind.name!r} is registered already")
+    raise BadInput(f"a decoder kind named {kind.name!r} is registered already")
   if kind.letter and kind.letter in {k.letter for k in KINDS.values()}:
-    raise ValueError(f"the letter {kind.letter!r} names a decoder kind already")
+    raise BadInput(f"the letter {kind.letter!r} names a decoder kind already")
   KINDS[kind.name] = kind
   return kind
 
@@ -56,7 +58,7 @@ def unregister(name: str) -> None:
 
 def kind(name: str) -> DecoderKind:
   if name not in KINDS:
-    raise ValueError(f"unknown decoder {name!r}; known: {', '.join(KINDS)}")
+    raise BadInput(f"unknown decoder {name!r}; known: {', '.join(KINDS)}")
   return KINDS[name]
 
 
@@ -65,7 +67,7 @@ def by_letter(letter: str) -> DecoderKind:
   for each in KINDS.values():
     if each.letter == letter:
       return each
-  raise ValueError(f"no decoder kind has the letter {letter!r}")
+  raise BadInput(f"no decoder kind has the letter {letter!r}")
 
 
 def learned() -> tuple[DecoderKind, ...]:

@@ -32,6 +32,12 @@ def test_every_public_name_resolves_and_help_shows_it():
     ds.nope  # noqa: B018
 
 
+def test_bad_input_is_its_own_value_error():
+  assert issubclass(ds.BadInput, ValueError)
+  with pytest.raises(ds.BadInput, match="no tasks given"):
+    ds.TrainConfig(tasks=()).validate()
+
+
 def test_importing_the_package_imports_no_jax(tmp_path):
   out = _python("import sys, discosyn_jax; print('jax' in sys.modules)", tmp_path)
   assert out.returncode == 0, out.stderr

@@ -8,6 +8,7 @@ import pytest
 
 from discosyn import cli, commands
 from discosyn_jax import config as config_lib
+from discosyn_jax.checks import BadInput
 from discosyn_jax.experiments import presets
 from tests.helpers import ROOT
 
@@ -156,3 +157,26 @@ def test_a_bad_flag_is_one_line_and_exit_status_2(argv, line, capsys):
   assert ended.value.code == 2
   (err,) = capsys.readouterr().err.splitlines()
   assert err.startswith(line), err
+
+
+def test_a_bug_shows_its_traceback_and_says_it_is_a_bug(monkeypatch, capsys):
+  """A ValueError that is not BadInput is an internal check that failed, not the user's
+  mistake: not the one line of bad input."""
+  def broken(args):
+    raise ValueError("an invariant of ours broke")
+  monkeypatch.setattr(commands, "cmd_tasks", broken)
+  assert cli.main(["tasks"]) == 1
+  err = capsys.readouterr().err.splitlines()
+  assert err[0] == "Traceback (most recent call last):", err
+  assert "ValueError: an invariant of ours broke" in err
+  assert err[-1] == ("discosyn: this is a bug in discosyn, not in what it was given: please "
+                     "report it with the command and the traceback above")
+  assert not any(line.startswith("discosyn: error:") for line in err)
+
+
+def test_bad_input_raised_in_a_command_is_one_line_and_exit_status_2(monkeypatch, capsys):
+  def refused(args):
+    raise BadInput("that input cannot be used")
+  monkeypatch.setattr(commands, "cmd_tasks", refused)
+  assert cli.main(["tasks"]) == 2
+  assert capsys.readouterr().err.splitlines() == ["discosyn: error: that input cannot be used"]

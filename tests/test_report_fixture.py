@@ -3,8 +3,6 @@ the fixture tests/fixtures/report-ci (tests/report_fixture.py made it), wherever
 
 import shutil
 
-import pytest
-
 from discosyn import cli
 from tests.report_fixture import FIXTURE
 
@@ -40,6 +38,5 @@ def test_logs_without_z_or_checkpoints_report_without_a_t_sne_and_a_failure_leav
   def broken(*args, **kwargs):
     raise RuntimeError("no display")
   monkeypatch.setattr(report_figures, "tsne", broken)
-  with pytest.raises(RuntimeError):
-    cli.main(["report", str(tmp_path / "with-z"), "--out", str(tmp_path / "failed")])
+  assert cli.main(["report", str(tmp_path / "with-z"), "--out", str(tmp_path / "failed")]) == 1
   assert not (tmp_path / "failed").exists()

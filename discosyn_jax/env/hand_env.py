@@ -12,6 +12,7 @@ import jax.numpy as jnp
 from discosyn_jax import quiet_mjx  # noqa: F401  (first: MJX imported quietly, before brax)
 from brax.envs.base import Env, State
 
+from discosyn_jax.checks import BadInput
 from discosyn_jax.env import hands, physics
 from discosyn_jax.env.task import Task, own_code
 
@@ -20,11 +21,11 @@ def _check_shapes(name: str, state: State) -> None:
   """A task's functions return one observation vector and a number per metric (a task of
   one's own is checked here, before anything is traced with it)."""
   if len(state.obs.shape) != 1:
-    raise ValueError(f"{name}.observation returns shape {state.obs.shape}, not one vector")
+    raise BadInput(f"{name}.observation returns shape {state.obs.shape}, not one vector")
   wrong = {k: v.shape for k, v in state.metrics.items() if v.shape != ()}
   if wrong:
-    raise ValueError(f"{name}: success and each reward term are one number per state, not "
-                     + ", ".join(f"{k} of shape {s}" for k, s in wrong.items()))
+    raise BadInput(f"{name}: success and each reward term are one number per state, not "
+                   + ", ".join(f"{k} of shape {s}" for k, s in wrong.items()))
 
 
 class HandEnv(Env):
@@ -44,8 +45,8 @@ class HandEnv(Env):
     try:
       first = jax.eval_shape(self.reset, jax.random.key(0))
     except (TypeError, AttributeError, KeyError, IndexError) as err:
-      raise ValueError(f"{type(task).__name__}: its functions failed on a fresh episode: "
-                       f"{type(err).__name__}: {err}") from None
+      raise BadInput(f"{type(task).__name__}: its functions failed on a fresh episode: "
+                     f"{type(err).__name__}: {err}") from None
     self._obs_shape = first.obs.shape
     _check_shapes(type(task).__name__, first)
 
@@ -85,8 +86,8 @@ class HandEnv(Env):
     # one env takes one action; a batch goes through jax.vmap (a wrong shape would
     # otherwise surface as an XLA INTERNAL error inside the physics callback)
     if jnp.shape(action) != (self.action_size,):
-      raise ValueError(f"an action of one env has shape ({self.action_size},), not "
-                       f"{jnp.shape(action)}; step a batch of envs with jax.vmap")
+      raise BadInput(f"an action of one env has shape ({self.action_size},), not "
+                     f"{jnp.shape(action)}; step a batch of envs with jax.vmap")
     with own_code(self.task, self.hand):
       return self._step(state, action)
 

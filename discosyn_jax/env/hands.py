@@ -20,6 +20,7 @@ import pathlib
 import mujoco
 import numpy as np
 
+from discosyn_jax.checks import BadInput
 from discosyn_jax.env import assets
 
 PREFIX = "hand/"
@@ -50,7 +51,7 @@ class Hand:
 
 def load(spec: str | Hand) -> Hand:
   """The hand of `spec`: a shipped hand's name, or "path/to/hand.xml" ("...xml:SITE" names
-  the palm site). ValueError in one line for a wrong spec or a file that is no hand."""
+  the palm site). BadInput in one line for a wrong spec or a file that is no hand."""
   if isinstance(spec, Hand):
     return spec
   if spec in SHIPPED:
@@ -58,12 +59,12 @@ def load(spec: str | Hand) -> Hand:
   else:
     where, _, site = spec.partition(".xml")
     if ".xml" not in spec or not where or (site and not site.startswith(":")):
-      raise ValueError(f"a hand is one of {', '.join(SHIPPED)} or an MJCF file "
-                       f"(path/to/hand.xml, or path/to/hand.xml:PALM_SITE), not {spec!r}")
+      raise BadInput(f"a hand is one of {', '.join(SHIPPED)} or an MJCF file "
+                     f"(path/to/hand.xml, or path/to/hand.xml:PALM_SITE), not {spec!r}")
     path = pathlib.Path(where + ".xml").expanduser().resolve()
     site = site.removeprefix(":") or PALM_SITE_NAME
     if not path.is_file():
-      raise ValueError(f"no hand MJCF file {where}.xml")
+      raise BadInput(f"no hand MJCF file {where}.xml")
     name = str(path) if site == PALM_SITE_NAME else f"{path}:{site}"
     hand = Hand(name, path, site)
   check(hand)
@@ -75,7 +76,7 @@ def read(hand: Hand) -> mujoco.MjSpec:
   try:
     return mujoco.MjSpec.from_file(str(hand.mjcf))
   except ValueError as err:
-    raise ValueError(f"hand {hand.mjcf}: {' '.join(str(err).split())}") from None
+    raise BadInput(f"hand {hand.mjcf}: {' '.join(str(err).split())}") from None
 
 
 @functools.cache
@@ -85,30 +86,30 @@ def _alone(hand: Hand) -> tuple[mujoco.MjModel, mujoco.MjData]:
   try:
     model = spec.compile()
   except ValueError as err:
-    raise ValueError(f"hand {hand.mjcf}: {' '.join(str(err).split())}") from None
+    raise BadInput(f"hand {hand.mjcf}: {' '.join(str(err).split())}") from None
   data = mujoco.MjData(model)
   mujoco.mj_kinematics(model, data)
   return model, data
 
 
 def check(hand: Hand) -> None:
-  """One ValueError naming the first thing that makes the file no hand for the tasks."""
+  """A BadInput naming the first thing that makes the file no hand for the tasks."""
   model, _ = _alone(hand)
   where = f"hand {hand.name}"
   if model.nu == 0:
-    raise ValueError(f"{where}: the MJCF has no actuators (each actuator is one action)")
+    raise BadInput(f"{where}: the MJCF has no actuators (each actuator is one action)")
   unbounded = [model.actuator(i).name or str(i) for i in range(model.nu)
                if not model.actuator_ctrllimited[i]]
   if unbounded:
-    raise ValueError(f"{where}: actuator {unbounded[0]} has no ctrlrange (actions map onto it)")
+    raise BadInput(f"{where}: actuator {unbounded[0]} has no ctrlrange (actions map onto it)")
   wrong = [model.joint(j).name or str(j) for j in range(model.njnt)
            if model.jnt_type[j] not in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))]
   if wrong:
-    raise ValueError(f"{where}: joint {wrong[0]} is free or a ball; a hand has a fixed root "
-                     "and hinge or slide joints")
+    raise BadInput(f"{where}: joint {wrong[0]} is free or a ball; a hand has a fixed root "
+                   "and hinge or slide joints")
   if mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, hand.palm_site) < 0:
-    raise ValueError(f"{where}: no site named {hand.palm_site!r} marks the palm (its frame: "
-                     "z along the fingers, +y out of the back of the hand; docs/YOUR_HAND.md)")
+    raise BadInput(f"{where}: no site named {hand.palm_site!r} marks the palm (its frame: "
+                   "z along the fingers, +y out of the back of the hand; docs/YOUR_HAND.md)")
 
 
 def _pose(pos: np.ndarray, rot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

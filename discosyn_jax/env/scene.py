@@ -13,6 +13,7 @@ import warnings
 
 import mujoco
 
+from discosyn_jax.checks import BadInput
 from discosyn_jax.env import assets, hands
 
 # An object keeps its names: MuJoCo then warns, at the attach and at every compile, that the
@@ -34,11 +35,11 @@ def _attach_unprefixed(spec: mujoco.MjSpec, child: mujoco.MjSpec) -> None:
 def _object(scene: str | pathlib.Path) -> mujoco.MjSpec:
   if isinstance(scene, pathlib.Path):
     if not scene.is_file():
-      raise ValueError(f"no object MJCF file {scene}")
+      raise BadInput(f"no object MJCF file {scene}")
     try:
       return mujoco.MjSpec.from_file(str(scene.resolve()))
     except ValueError as err:
-      raise ValueError(f"{scene}: {str(err).strip()}") from None
+      raise BadInput(f"{scene}: {str(err).strip()}") from None
   return mujoco.MjSpec.from_file(str(assets.xml_path(f"objects/{scene}.xml")))
 
 

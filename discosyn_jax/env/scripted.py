@@ -15,6 +15,7 @@ from typing import Callable, Mapping
 
 import numpy as np
 
+from discosyn_jax.checks import BadInput
 from discosyn_jax.env import hands
 
 # our hand's actuators in action order, by joint name ("A_WRJ1" -> "WRJ1")
@@ -98,10 +99,10 @@ class Motion:
   leap_direction: float = 1.0
 
   def actions(self, steps: int, dt: float, hand: str = hands.DEFAULT) -> np.ndarray:
-    """(steps, actuators) actions in [-1, 1] on shipped `hand`; ValueError for a hand without
+    """(steps, actuators) actions in [-1, 1] on shipped `hand`; BadInput for a hand without
     scripts."""
     if hand == "leap16":
       return leap_sweep(steps, dt, direction=self.leap_direction)
     if hand != "shadow20":
-      raise ValueError(f"no scripted motions for hand {hand}: only for {', '.join(hands.SHIPPED)}")
+      raise BadInput(f"no scripted motions for hand {hand}: only for {', '.join(hands.SHIPPED)}")
     return self.script(steps, dt, **self.options)

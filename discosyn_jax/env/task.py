@@ -19,6 +19,7 @@ import jax
 import mujoco
 
 from discosyn_jax import checks
+from discosyn_jax.checks import BadInput
 from discosyn_jax.env.settings import CONTROL_DT
 from discosyn_jax.env import hands, scene, scripted
 from discosyn_jax.env.physics import PhysicsView
@@ -50,11 +51,11 @@ class TaskConfig:
     checks.fields(self)
     for name in ("episode_length", "n_substeps", "solver_iterations", "ls_iterations"):
       if getattr(self, name) < 1:
-        raise ValueError(f"{name} must be at least 1, not {getattr(self, name)}")
+        raise BadInput(f"{name} must be at least 1, not {getattr(self, name)}")
     if self.cone not in _CONES:
-      raise ValueError(f"cone must be one of {', '.join(_CONES)}, not {self.cone!r}")
+      raise BadInput(f"cone must be one of {', '.join(_CONES)}, not {self.cone!r}")
     if self.hand_noise < 0:
-      raise ValueError(f"hand_noise must not be negative, not {self.hand_noise}")
+      raise BadInput(f"hand_noise must not be negative, not {self.hand_noise}")
 
   @property
   def timestep(self) -> float:
@@ -120,7 +121,7 @@ class Task(abc.ABC):
     return jax.numpy.zeros(())
 
 
-class TaskError(ValueError):
+class TaskError(BadInput):
   """An exception raised by a task's own code, in one line: the task, its function, the
   file and line where it was raised, and the exception (its __cause__, with the traceback)."""
 

@@ -37,6 +37,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from discosyn_jax.checks import BadInput
+
 if TYPE_CHECKING:
   from discosyn_jax.training.trainer import Trainer
 
@@ -292,7 +294,7 @@ def run(args) -> None:
     base = base.replace(reset_pool=True)
   for name in ("steps", "repeats"):
     if getattr(args, name) < 1:
-      raise ValueError(f"--{name} must be at least 1, not {getattr(args, name)}")
+      raise BadInput(f"--{name} must be at least 1, not {getattr(args, name)}")
   rows = [(impl, base.replace(backend=backend, num_envs=batch, physics=physics).validate())
           for backend in args.backends
           for impl in ((args.impls or [None]) if backend == "mjx" else [None])

@@ -51,13 +51,14 @@ from typing import Any
 import numpy as np
 
 from discosyn_jax import atomic, checks, config as config_lib
+from discosyn_jax.checks import BadInput
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.experiments import intervals
 
 PLAN_FILE = "plan.json"  # the plan, copied into the folder of its runs
 
 
-class PlanError(ValueError):
+class PlanError(BadInput):
   """A plan, or the runs it is judged on, that cannot be run or judged: the line names the
   file or the row and field (the CLI prints it alone, exit 2)."""
 

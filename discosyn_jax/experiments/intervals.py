@@ -31,6 +31,8 @@ import math
 
 import numpy as np
 
+from discosyn_jax.checks import BadInput
+
 # 2,000 replications for every interval: rliable's own for profiles and its README's for the
 # probability of improvement; with 3-5 seeds a task the bootstrap distribution has few
 # distinct values, and its default 50,000 for aggregates would be most of a report's time
@@ -107,8 +109,8 @@ def _stack(scores: dict[str, np.ndarray]) -> np.ndarray:
   matrices = [np.asarray(m, float) for m in scores.values()]
   if not matrices or any(m.ndim != 2 or 0 in m.shape or m.shape != matrices[0].shape
                          for m in matrices):
-    raise ValueError("scores must be runs x tasks matrices of one shape, "
-                     f"not {[m.shape for m in matrices]}")
+    raise BadInput("scores must be runs x tasks matrices of one shape, "
+                   f"not {[m.shape for m in matrices]}")
   return np.stack(matrices, axis=-1)
 
 
@@ -141,7 +143,7 @@ def probability_of_improvement(x: dict[str, np.ndarray], y: dict[str, np.ndarray
   of runs each), with its interval (each method's runs resampled on their own)."""
   a, b = _stack(x), _stack({name: y[name] for name in x})
   if a.shape[1:] != b.shape[1:]:
-    raise ValueError(f"the two methods' scores have {a.shape[1]} and {b.shape[1]} tasks")
+    raise BadInput(f"the two methods' scores have {a.shape[1]} and {b.shape[1]} tasks")
   return dict(zip(x, _estimates(*_intervals([a, b], improvement, reps))))
 
 
@@ -184,7 +186,7 @@ def mean_difference(x: dict[str, np.ndarray], y: dict[str, np.ndarray],
   a difference the probability of improvement dilutes."""
   a, b = _stack(x), _stack({name: y[name] for name in x})
   if a.shape[1:] != b.shape[1:]:
-    raise ValueError(f"the two methods' scores have {a.shape[1]} and {b.shape[1]} tasks")
+    raise BadInput(f"the two methods' scores have {a.shape[1]} and {b.shape[1]} tasks")
   return dict(zip(x, _estimates(*_intervals([a, b], difference, reps))))
 
 
@@ -202,8 +204,8 @@ def seeds_for(spread_x: float, spread_y: float, effect: float, runs_y: int | Non
     m = n if runs_y is None else runs_y
     if effect / math.sqrt(spread_x ** 2 / n + spread_y ** 2 / m) >= need:
       return n
-  raise ValueError(f"no run count up to 1000 separates an effect of {effect} with "
-                   f"{runs_y} runs of the other row")
+  raise BadInput(f"no run count up to 1000 separates an effect of {effect} with "
+                 f"{runs_y} runs of the other row")
 
 
 def seeds_to_separate(p: Estimate, seeds: int) -> int | None:

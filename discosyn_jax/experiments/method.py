@@ -25,6 +25,7 @@ import re
 from typing import Any
 
 from discosyn_jax import decoders
+from discosyn_jax.checks import BadInput
 from discosyn_jax.config import GIVEN_START, OLD_STARTS
 from discosyn_jax.experiments.presets import DECAY  # the decayed update's row (rank)
 
@@ -88,9 +89,9 @@ class Method:
 
   def __post_init__(self):
     if self.family not in FAMILIES:
-      raise ValueError(f"unknown method family {self.family!r}; families: {', '.join(FAMILIES)}")
+      raise BadInput(f"unknown method family {self.family!r}; families: {', '.join(FAMILIES)}")
     if self.reuse not in ("", *REUSES):
-      raise ValueError(f"unknown reuse {self.reuse!r}; one of: {', '.join(REUSES)}")
+      raise BadInput(f"unknown reuse {self.reuse!r}; one of: {', '.join(REUSES)}")
 
   @property
   def name(self) -> str:
@@ -122,8 +123,8 @@ class Method:
     """The Method a name stands for; a name this release would not write is refused."""
     match = _name_pattern().fullmatch(name)
     if not match:
-      raise ValueError(f"{name!r} is not a method's name (e.g. PPO, PCA4, DiscoSyn3-L-reward, "
-                       "Random3-L-zfree, DiscoSyn3-L-reward frozen)")
+      raise BadInput(f"{name!r} is not a method's name (e.g. PPO, PCA4, DiscoSyn3-L-reward, "
+                     "Random3-L-zfree, DiscoSyn3-L-reward frozen)")
     fields: dict[str, Any] = dict(family=match["family"], synergies=int(match["b"] or 0),
                                   own=int(match["own"] or 0),
                                   decoder=match["decoder"] or "", reuse=match["reuse"] or "")
@@ -143,13 +144,13 @@ class Method:
     if match["acting"]:
       acting = _RESIDUAL.fullmatch(match["acting"][1:])
       if not acting:
-        raise ValueError(f"{name!r}: a method used on other tasks acts with a residual ('-res0.3r150'), "
-                         f"not {match['acting'][1:]!r}")
+        raise BadInput(f"{name!r}: a method used on other tasks acts with a residual ('-res0.3r150'), "
+                       f"not {match['acting'][1:]!r}")
       fields["acting_residual"] = _residual(acting)
     method = cls(**fields, tag=tuple(tag))
     if method.name != name:  # parts out of their order, or a residual not last
-      raise ValueError(f"{name!r} is not a method's name as written: its parts in order "
-                       f"read {method.name!r}")
+      raise BadInput(f"{name!r} is not a method's name as written: its parts in order "
+                     f"read {method.name!r}")
     return method
 
   @classmethod

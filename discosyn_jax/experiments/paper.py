@@ -56,6 +56,7 @@ import jax
 import numpy as np
 
 from discosyn_jax import decoders, tasks
+from discosyn_jax.checks import BadInput
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import hands
 from discosyn_jax.run import layout
@@ -271,7 +272,7 @@ class Planner:
   def __init__(self, out: pathlib.Path, scale: str, seed: int, task_sets=None, decoder_from=None,
                hand: str = hands.DEFAULT):
     if scale not in SCALES:
-      raise ValueError(f"unknown scale {scale!r}; scales: {', '.join(SCALES)}")
+      raise BadInput(f"unknown scale {scale!r}; scales: {', '.join(SCALES)}")
     self.out, self.scale, self.seed, self.hand = pathlib.Path(out), scale, seed, hand
     # folders end in seed<n>, or <hand>-seed<n> on another hand than ours
     self.tag = (f"{hands.label(hand)}-" if hand != hands.DEFAULT else "") + f"seed{seed}"
@@ -433,7 +434,7 @@ class Planner:
       return self.baselines(experiment[10:])
     if experiment in ("transfer", "sparse"):  # the paper's rows, then the residual's
       return self.frozen_rows(experiment, ("", presets.RESIDUAL_SUFFIX))
-    raise ValueError(f"unknown experiment {experiment!r}; experiments: {', '.join(EXPERIMENTS)}")
+    raise BadInput(f"unknown experiment {experiment!r}; experiments: {', '.join(EXPERIMENTS)}")
 
 
 TABLES = {"table1": "set1", "table2": "set2"}  # the paper's tables: PAPER_ROWS of a set
@@ -467,7 +468,7 @@ def run(experiment: str, out: pathlib.Path, scale: str, seeds=None, *,
   trained elsewhere instead of their own DiscoSyn run. `methods`: only these methods' steps
   and the steps they need (more seeds of some rows, say)."""
   if decoder_from and experiment not in ("transfer", "sparse"):
-    raise ValueError(f"a decoder can be given to transfer and sparse only, not to {experiment}")
+    raise BadInput(f"a decoder can be given to transfer and sparse only, not to {experiment}")
   out = pathlib.Path(out)
   if seeds is None:
     seeds = SCALES[scale].seeds if scale in SCALES else (0,)
@@ -478,8 +479,8 @@ def run(experiment: str, out: pathlib.Path, scale: str, seeds=None, *,
     known = {s.method for s in plans[0] if isinstance(s, Train)}
     unknown = [m.name for m in methods if m not in known]
     if unknown:
-      raise ValueError(f"{experiment} has no method {', '.join(map(repr, unknown))}; its methods: "
-                       f"{', '.join(sorted(m.name for m in known))}")
+      raise BadInput(f"{experiment} has no method {', '.join(map(repr, unknown))}; its methods: "
+                     f"{', '.join(sorted(m.name for m in known))}")
     plans = [select(steps, methods) for steps in plans]
   folders = []
   for steps in plans:

@@ -12,6 +12,7 @@ random start) name each start on every set.
 from __future__ import annotations
 
 from discosyn_jax import decoders
+from discosyn_jax.checks import BadInput
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.tasks import TASK_SETS
 
@@ -110,5 +111,5 @@ for _set in ("planted", "planted_slack", "planted_found", "planted_reach", "plan
 
 def preset(name: str) -> TrainConfig:
   if name not in PRESETS:
-    raise ValueError(f"unknown preset {name!r}; presets: {', '.join(PRESETS)}")
+    raise BadInput(f"unknown preset {name!r}; presets: {', '.join(PRESETS)}")
   return PRESETS[name]

@@ -25,6 +25,7 @@ import shutil
 import numpy as np
 
 from discosyn_jax import atomic, config as config_lib
+from discosyn_jax.checks import BadInput
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.run import folder, layout, logs
 
@@ -187,9 +188,9 @@ def keep(out: pathlib.Path, dest: pathlib.Path, log=print) -> list[pathlib.Path]
   and left out."""
   out, dest = pathlib.Path(out), pathlib.Path(dest)
   if not out.is_dir():
-    raise ValueError(f"{out} is not a folder")
+    raise BadInput(f"{out} is not a folder")
   if dest.resolve() == out.resolve() or out.resolve() in dest.resolve().parents:
-    raise ValueError(f"{dest} is {out} or inside it: keep the records in another folder")
+    raise BadInput(f"{dest} is {out} or inside it: keep the records in another folder")
   kept = []
   for folder in sorted(p for p in out.iterdir() if p.is_dir()):
     names = _record_of(folder)
@@ -207,5 +208,5 @@ def keep(out: pathlib.Path, dest: pathlib.Path, log=print) -> list[pathlib.Path]
       _relative_decoder_from(folder, target / layout.CONFIG_FILE)
     kept.append(target)
   if not kept:
-    raise ValueError(f"{out} holds no finished run or fit to keep")
+    raise BadInput(f"{out} holds no finished run or fit to keep")
   return kept

@@ -37,6 +37,7 @@ from typing import Any
 
 import numpy as np
 
+from discosyn_jax.checks import BadInput
 from discosyn_jax.experiments import confirm, intervals, record, report_figures
 from discosyn_jax.experiments.method import Method
 from discosyn_jax.experiments.presets import REWARDED
@@ -464,11 +465,11 @@ def improvement_of(runs: list[Run], task_set: str, x: str | Method, y: str | Met
                    task_names=None) -> dict[str, intervals.Estimate]:
   """P(x > y) per score for any two rows of a set (a row by its name or its Method), over
   its tasks or `task_names` alone: the comparisons the tables do not hold (two controls, one
-  task, ...). ValueError naming the rows the set has where one is not there."""
+  task, ...). BadInput naming the rows the set has where one is not there."""
   in_set = [r for r in runs if r.task_set == task_set]
   if not in_set:
     sets = ", ".join(sorted({r.task_set for r in runs})) or "none"
-    raise ValueError(f"no runs of set {task_set!r} (sets: {sets})")
+    raise BadInput(f"no runs of set {task_set!r} (sets: {sets})")
   task_names = task_names or list(dict.fromkeys(t for r in in_set for t in r.config.tasks))
   matrices = score_matrices(in_set, task_names)
   rows = {str(m): m for m in matrices["final"]}
@@ -476,8 +477,8 @@ def improvement_of(runs: list[Run], task_set: str, x: str | Method, y: str | Met
   def of(row):
     method = row if isinstance(row, Method) else rows.get(str(row))
     if method not in matrices["final"]:
-      raise ValueError(f"no row {str(row)!r} on {task_set} with runs on {', '.join(task_names)}; "
-                       f"rows: {', '.join(rows)}")
+      raise BadInput(f"no row {str(row)!r} on {task_set} with runs on {', '.join(task_names)}; "
+                     f"rows: {', '.join(rows)}")
     return {kind: matrices[kind][method] for kind in SCORES}
 
   return intervals.probability_of_improvement(of(x), of(y))
@@ -489,18 +490,18 @@ def write(paths, out: pathlib.Path, threshold: float = 0.8, with_tsne: bool = Tr
   """Write OUT/REPORT.md and its figures; return the REPORT.md path. A run's final success
   is the mean of its last `final_k` evaluations."""
   if not 0 < threshold <= 1:
-    raise ValueError(f"the success threshold must be in (0, 1], not {threshold}")
+    raise BadInput(f"the success threshold must be in (0, 1], not {threshold}")
   plans = confirm.plans_in(paths)  # read first: a damaged plan is refused before any work
   runs, fits = find(paths, final_k=final_k)
   # the committed records a plan names: read for its verdicts, not pooled into the tables
   plans = [(plan, folder, find(confirm.record_paths(plan), inside=True, final_k=final_k)[0])
            for plan, folder in plans]
   if not runs and not fits:
-    raise ValueError("no runs among the folders given")
+    raise BadInput("no runs among the folders given")
   out = pathlib.Path(out)
   report = out / "REPORT.md"
   if report.exists() and not force:
-    raise ValueError(f"{out} already holds a report; pass --force to replace it")
+    raise BadInput(f"{out} already holds a report; pass --force to replace it")
   made = not out.exists()
   try:
     return _write(runs, fits, paths, out, threshold, with_tsne, final_k, plans)

@@ -14,6 +14,7 @@ import functools
 import pathlib
 from typing import Any
 
+from discosyn_jax.checks import BadInput
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import hands
 from discosyn_jax.run import folder, layout, record_files
@@ -125,11 +126,11 @@ def find(paths, inside: bool = False, final_k: int = FINAL_K) -> tuple[list[Run]
   each run's final success the mean of its last `final_k` evaluations. A folder named here
   must hold one; one found inside (a report, say) may hold none."""
   if final_k < 1:
-    raise ValueError(f"the final success is the mean of at least 1 evaluation, not {final_k}")
+    raise BadInput(f"the final success is the mean of at least 1 evaluation, not {final_k}")
   runs, fits = [], []
   for path in map(pathlib.Path, paths):
     if not path.is_dir():
-      raise ValueError(f"{path} is not a folder")
+      raise BadInput(f"{path} is not a folder")
     if (path / layout.CONFIG_FILE).is_file():
       runs.append(dataclasses.replace(load_run(path), final_k=final_k))
     elif (path / record.FIT_FILE).is_file():
@@ -138,7 +139,7 @@ def find(paths, inside: bool = False, final_k: int = FINAL_K) -> tuple[list[Run]
       inner = sorted(p for p in path.iterdir() if p.is_dir())
       found = find(inner, inside=True, final_k=final_k) if inner else ([], [])
       if not found[0] and not found[1] and not inside:
-        raise ValueError(f"{path} holds no run (config.json) and no synergy fit")
+        raise BadInput(f"{path} holds no run (config.json) and no synergy fit")
       runs += found[0]
       fits += found[1]
   if not inside:
@@ -152,8 +153,8 @@ def _one_run_per_seed(runs: list[Run]) -> None:
   for run in runs:
     key = (run.experiment, run.task_set, tuple(run.config.tasks), run.method, run.seed)
     if key in seen:
-      raise ValueError(f"{seen[key].path} and {run.path} are both {run.method} seed {run.seed} "
-                       f"on {run.task_set}; give the report one of them")
+      raise BadInput(f"{seen[key].path} and {run.path} are both {run.method} seed {run.seed} "
+                     f"on {run.task_set}; give the report one of them")
     seen[key] = run
 
 

@@ -49,6 +49,7 @@ import sys
 import numpy as np
 
 from discosyn_jax import config as config_lib
+from discosyn_jax.checks import BadInput
 from discosyn_jax.experiments import confirm, intervals, report, report_runs
 from discosyn_jax.experiments.method import Method
 from discosyn_jax.experiments.report_runs import Run
@@ -119,16 +120,16 @@ class Records:
     _, required, optional = next(row for row in POOLED_SET2 if row[0] == label)
     runs = self.runs(required)
     if len(runs) != len(required):
-      raise ValueError(f"{label}: {len(required)} records named, {len(runs)} finished runs read")
+      raise BadInput(f"{label}: {len(required)} records named, {len(runs)} finished runs read")
     same = lambda run: config_lib.same_run(run.config.replace(seed=runs[0].config.seed),
                                            runs[0].config)
     odd = [str(r.path.relative_to(self.base)) for r in runs if not same(r)]
     if odd:
-      raise ValueError(f"{label}: {', '.join(odd)} train another config than the row's")
+      raise BadInput(f"{label}: {', '.join(odd)} train another config than the row's")
     runs += [r for r in self.runs(optional) if same(r)]
     seeds = [r.seed for r in runs]
     if len(set(seeds)) != len(seeds):
-      raise ValueError(f"{label}: a seed twice among {seeds}")
+      raise BadInput(f"{label}: a seed twice among {seeds}")
     return tuple(sorted(runs, key=lambda r: r.seed))
 
   def paper(self, task_set: str) -> dict[Method, list[Run]]:
@@ -577,22 +578,22 @@ def tables(root: pathlib.Path | None = None) -> dict[str, str]:
 
 # -- the pages -----------------------------------------------------------------------------
 def blocks(text: str) -> list[tuple[str, int, int]]:
-  """(name, start, end) of each table's text between its markers in a page; ValueError for a
+  """(name, start, end) of each table's text between its markers in a page; BadInput for a
   marker without its pair."""
   found, opened = [], None
   for match in MARKER.finditer(text):
     closing, name = match.group(1) == "/", match.group(2)
     if not closing:
       if opened:
-        raise ValueError(f"table {opened[0]!r} opened and not closed before table {name!r}")
+        raise BadInput(f"table {opened[0]!r} opened and not closed before table {name!r}")
       opened = (name, match.end())
     else:
       if not opened or opened[0] != name:
-        raise ValueError(f"a closing marker of table {name!r} without its opening one")
+        raise BadInput(f"a closing marker of table {name!r} without its opening one")
       found.append((name, opened[1], match.start()))
       opened = None
   if opened:
-    raise ValueError(f"table {opened[0]!r} opened and never closed")
+    raise BadInput(f"table {opened[0]!r} opened and never closed")
   return found
 
 
@@ -601,7 +602,7 @@ def render(text: str, found: dict[str, str]) -> str:
   out, at = [], 0
   for name, start, end in blocks(text):
     if name not in found:
-      raise ValueError(f"no table {name!r} (tables: {', '.join(found)})")
+      raise BadInput(f"no table {name!r} (tables: {', '.join(found)})")
     out += [text[at:start], "\n" + found[name].strip("\n") + "\n"]
     at = end
   return "".join(out + [text[at:]])

@@ -36,6 +36,7 @@ import jax
 import orbax.checkpoint as ocp
 
 from discosyn_jax import atomic
+from discosyn_jax.checks import BadInput
 from discosyn_jax.run import layout
 
 MANIFEST = "manifest.json"
@@ -47,7 +48,7 @@ MANIFESTS_SINCE = "2026-11-29 22:33 UTC"
 MANIFESTS_SINCE_NS = 1795991614 * 10**9
 
 
-class Damaged(ValueError):
+class Damaged(BadInput):
   """A checkpoint that cannot be read or whose files differ from its manifest."""
 
 
@@ -353,7 +354,7 @@ def read_arrays(path: pathlib.Path, prefix: str) -> dict[str, "np.ndarray"]:
 def restore(path: pathlib.Path, target):
   """The state saved at `path`, in the structure of `target` (a state of the same config).
 
-  A damaged checkpoint raises Damaged; one written for another config raises ValueError
+  A damaged checkpoint raises Damaged; one written for another config raises BadInput
   with one line saying so.
   """
   verify(path)
@@ -371,8 +372,8 @@ def restore(path: pathlib.Path, target):
     have = (tuple(saved[name].shape), saved[name].dtype) if name in saved else "absent"
     want = (tuple(wanted[name].shape), wanted[name].dtype) if name in wanted else "absent"
     if have != want:
-      raise ValueError(f"checkpoint {path} does not match this config: {name} is {have} there, "
-                       f"{want} here")
+      raise BadInput(f"checkpoint {path} does not match this config: {name} is {have} there, "
+                     f"{want} here")
   abstract = {k: ocp.utils.to_shape_dtype_struct(v) for k, v in wanted.items()}
   try:
     with _quiet():

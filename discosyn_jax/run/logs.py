@@ -12,6 +12,7 @@ import pathlib
 import time
 
 from discosyn_jax import atomic
+from discosyn_jax.checks import BadInput
 from discosyn_jax.run import layout, record_files
 from discosyn_jax.run.record_files import RecordError
 
@@ -42,7 +43,7 @@ def read_jsonl(path: pathlib.Path, check=None) -> list[dict]:
   (its words, None for nothing), is a RecordError naming the file and the line."""
   path = pathlib.Path(path)
   if not path.is_file():
-    raise ValueError(f"{path} does not exist")
+    raise BadInput(f"{path} does not exist")
   opener = lzma.open if path.suffix == ARCHIVED else open
   try:
     with opener(path, "rt") as f:

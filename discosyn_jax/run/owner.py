@@ -24,13 +24,14 @@ import socket
 import time
 
 from discosyn_jax import atomic
+from discosyn_jax.checks import BadInput
 from discosyn_jax.run import checkpoints, layout
 
 _TRIES = 20  # a reader's probe holds the lock for microseconds: a writer tries again
 
 
-class Busy(ValueError):
-  """Another live process writes the run."""
+class Busy(BadInput):
+  """Another live process writes the run: the folder named cannot be used now."""
 
 
 def is_run(folder: pathlib.Path) -> bool:
@@ -104,8 +105,8 @@ class Writer:
       settle(self.run_dir, self.warn)
     except OSError as err:
       self.__exit__(None, None, None)
-      raise ValueError(f"cannot write the run directory {self.run_dir}: "
-                       f"{err.strerror or err}") from None
+      raise BadInput(f"cannot write the run directory {self.run_dir}: "
+                     f"{err.strerror or err}") from None
     except BaseException:
       self.__exit__(None, None, None)
       raise
@@ -164,8 +165,8 @@ class Writer:
       write_config()
     except OSError as err:
       self.undo()
-      raise ValueError(f"cannot write the run directory {self.run_dir}: "
-                       f"{err.strerror or err}") from None
+      raise BadInput(f"cannot write the run directory {self.run_dir}: "
+                     f"{err.strerror or err}") from None
 
   def keep(self) -> None:
     """The new run has a good checkpoint: the run it replaces goes."""

@@ -9,6 +9,7 @@ import pathlib
 from typing import Any
 
 from discosyn_jax import config as config_lib
+from discosyn_jax.checks import BadInput
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.run import checkpoints, layout, owner
 
@@ -24,27 +25,27 @@ def run_config(run_dir: pathlib.Path, config: TrainConfig, resume: bool, force: 
   """
   run_dir = pathlib.Path(run_dir)
   if run_dir.exists() and not run_dir.is_dir():
-    raise ValueError(f"{run_dir} is a file, not a run directory")
+    raise BadInput(f"{run_dir} is a file, not a run directory")
   holds_run = (run_dir / layout.CONFIG_FILE).is_file()
   if resume:
     if not holds_run:
-      raise ValueError(f"--resume: {run_dir} holds no run to continue")
+      raise BadInput(f"--resume: {run_dir} holds no run to continue")
     _check_writable(run_dir)
     saved = config_lib.load(run_dir / layout.CONFIG_FILE)
     differs = config_lib.mismatches(saved, config)
     if differs:
-      raise ValueError(f"--resume: the run in {run_dir} does not match: {differs[0]}")
+      raise BadInput(f"--resume: the run in {run_dir} does not match: {differs[0]}")
     return saved.replace(**{k: getattr(config, k) for k in config_lib.RESUMABLE}).validate()
   if holds_run and not force:
-    raise ValueError(f"{run_dir} already holds a run; pass --resume to continue it or "
-                     f"--force to replace it")
+    raise BadInput(f"{run_dir} already holds a run; pass --resume to continue it or "
+                   f"--force to replace it")
   # --force replaces a run, never a folder of something else
   if holds_run and not owner.is_run(run_dir):
-    raise ValueError(f"{run_dir} holds a {layout.CONFIG_FILE} but no run of discosyn (none of "
-                     f"{', '.join(sorted(layout.RUN_NAMES - {layout.ASIDE}))}); --force replaces "
-                     f"only a run: choose another directory")
+    raise BadInput(f"{run_dir} holds a {layout.CONFIG_FILE} but no run of discosyn (none of "
+                   f"{', '.join(sorted(layout.RUN_NAMES - {layout.ASIDE}))}); --force replaces "
+                   f"only a run: choose another directory")
   if run_dir.exists() and not holds_run and owner.contents(run_dir):
-    raise ValueError(f"{run_dir} is not empty and holds no run; choose another directory")
+    raise BadInput(f"{run_dir} is not empty and holds no run; choose another directory")
   _check_writable(run_dir)
   return config.validate()
 
@@ -54,9 +55,9 @@ def _check_writable(path: pathlib.Path) -> None:
   folder or file system."""
   existing = next(p for p in (path, *path.parents) if p.exists() or p == p.parent)
   if not existing.is_dir():
-    raise ValueError(f"cannot write {path}: {existing} is a file, not a folder")
+    raise BadInput(f"cannot write {path}: {existing} is a file, not a folder")
   if not os.access(existing, os.W_OK | os.X_OK):
-    raise ValueError(f"cannot write {path}: {existing} is not writable")
+    raise BadInput(f"cannot write {path}: {existing} is not writable")
 
 
 def find_run_dir(path: pathlib.Path) -> pathlib.Path:
@@ -65,7 +66,7 @@ def find_run_dir(path: pathlib.Path) -> pathlib.Path:
   for run_dir in (path, *path.parents):
     if (run_dir / layout.CONFIG_FILE).is_file():
       return run_dir
-  raise ValueError(f"{path} is not a run directory or a checkpoint in one")
+  raise BadInput(f"{path} is not a run directory or a checkpoint in one")
 
 
 def load_run(path: pathlib.Path) -> tuple[TrainConfig, pathlib.Path]:
@@ -89,8 +90,8 @@ def read_run(path: pathlib.Path, read,
       run_dir, read, lambda damaged, err: warn(f"{err}; skipped it"))
   writer = owner.writer_of(run_dir)
   if checkpoint is None:
-    raise ValueError(f"{run_dir} holds no good checkpoint yet"
-                     + (f" (it is being written by {writer})" if writer else ""))
+    raise BadInput(f"{run_dir} holds no good checkpoint yet"
+                   + (f" (it is being written by {writer})" if writer else ""))
   if writer:
     warn(f"{run_dir} is being written by {writer}: read its checkpoint {checkpoint}, "
          f"step {checkpoints.verify(checkpoint)}")

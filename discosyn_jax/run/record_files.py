@@ -11,9 +11,10 @@ import pathlib
 from typing import Any
 
 from discosyn_jax import checks
+from discosyn_jax.checks import BadInput
 
 
-class RecordError(ValueError):
+class RecordError(BadInput):
   """A run's file that does not hold what the run writes there: one line naming the file,
   the field and what was expected."""
 

@@ -26,12 +26,13 @@ from typing import Any
 
 import numpy as np
 
+from discosyn_jax.checks import BadInput
 from discosyn_jax.synergies import fitting
 
 FORMAT = 2
 
 
-class SynergyFileError(ValueError):
+class SynergyFileError(BadInput):
   """A synergy file or name that cannot be used: one line naming the file and why."""
 
 

@@ -33,6 +33,7 @@ import optax
 
 from discosyn_jax import decoders
 from discosyn_jax.agent import networks
+from discosyn_jax.checks import BadInput
 
 ARCHITECTURE = ("decoder", "n_synergies", "decoder_bias", "decoder_hidden", "squash_z")
 EVERY_KIND = ("decoder", "n_synergies", "squash_z")  # the rest a kind names (DecoderKind.fields)
@@ -164,11 +165,11 @@ def _decoder_model(fields: dict[str, Any], params: dict) -> networks.DiscoSyn:
 
 
 def decode(fields: dict[str, Any], params: dict, z: np.ndarray) -> np.ndarray:
-  """The decoder's mean at z, for a decoder described by `fields` (ARCHITECTURE); ValueError
+  """The decoder's mean at z, for a decoder described by `fields` (ARCHITECTURE); BadInput
   where z's last axis is not the decoder's b."""
   b = int(fields["n_synergies"])
   if np.ndim(z) < 1 or np.shape(z)[-1] != b:
-    raise ValueError(f"z must end in the decoder's {b} synergy activations, not shape {np.shape(z)}")
+    raise BadInput(f"z must end in the decoder's {b} synergy activations, not shape {np.shape(z)}")
   model = _decoder_model(fields, params)
   return np.asarray(model.apply({"params": {"synergy_decoder": params}}, jnp.asarray(z),
                                 method=networks.DiscoSyn.decode)[0])
@@ -198,8 +199,8 @@ def in_subspace_of(learned: dict, start: dict) -> dict:
 
 def _check_k(k: int, actions: np.ndarray):
   if not 1 <= k <= min(actions.shape):
-    raise ValueError(f"cannot fit {k} synergies to {actions.shape[0]} actions of size "
-                     f"{actions.shape[1]}")
+    raise BadInput(f"cannot fit {k} synergies to {actions.shape[0]} actions of size "
+                   f"{actions.shape[1]}")
 
 
 # -- synergy files -------------------------------------------------------------
@@ -221,8 +222,8 @@ def save(path: pathlib.Path, params: dict, fields: dict[str, Any], **meta) -> pa
   """Write a synergy file (atomically: a crash leaves no half-written file)."""
   path = pathlib.Path(path)
   if not path.name or path.is_dir():
-    raise ValueError(f"cannot write a synergy file to {str(path) or 'an empty path'}: "
-                     f"{'a folder is there' if path.is_dir() else 'no file name'}")
+    raise BadInput(f"cannot write a synergy file to {str(path) or 'an empty path'}: "
+                   f"{'a folder is there' if path.is_dir() else 'no file name'}")
   path.parent.mkdir(parents=True, exist_ok=True)
   flat = {".".join(str(getattr(k, "key", k)) for k in keys): np.asarray(leaf)
           for keys, leaf in jax.tree_util.tree_flatten_with_path(params)[0]}
@@ -253,26 +254,26 @@ def read(path: str | pathlib.Path) -> tuple[dict[str, Any], dict]:
       return read(kept)
     config, _, flat = reading.read_run(path, lambda c: checkpoints.read_arrays(c, _RUN_DECODER))
     if config.kind.full_action:
-      raise ValueError(f"{path} is a full-action run: it has no synergy decoder")
+      raise BadInput(f"{path} is a full-action run: it has no synergy decoder")
     meta = meta_of(config)
   elif path.is_file():
     if not zipfile.is_zipfile(path):  # a text file, an image: np.load would talk of pickles
-      raise ValueError(f"{path} is not a synergy file: not an .npz archive")
+      raise BadInput(f"{path} is not a synergy file: not an .npz archive")
     try:
       with np.load(path, allow_pickle=False) as data:
         meta = json.loads(str(data["meta"]))
         flat = {k: data[k] for k in data.files if k != "meta"}
     except KeyError:
-      raise ValueError(f"{path} is not a synergy file: it holds no meta") from None
+      raise BadInput(f"{path} is not a synergy file: it holds no meta") from None
     except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error) as err:
       # a truncated archive, a member whose CRC fails, meta that is not JSON
-      raise ValueError(f"{path} is not a synergy file: damaged or unreadable "
-                       f"({type(err).__name__}: {err})") from None
+      raise BadInput(f"{path} is not a synergy file: damaged or unreadable "
+                     f"({type(err).__name__}: {err})") from None
     _check_file(path, meta, flat)
   else:
     names = ", ".join(sorted(p.stem for p in SHIPPED.glob("*.npz")))
-    raise ValueError(f"decoder source {path} does not exist, and no shipped synergies have that "
-                     f"name (shipped: {names})")
+    raise BadInput(f"decoder source {path} does not exist, and no shipped synergies have that "
+                   f"name (shipped: {names})")
   meta = {**_DEFAULTS, **meta}
   meta["decoder_hidden"] = tuple(meta["decoder_hidden"])
   params: dict = {}
@@ -293,12 +294,12 @@ def _check_file(path, meta, flat: dict) -> None:
   fields = {**_DEFAULTS, **meta} if isinstance(meta, dict) else {}
   missing = [k for k in ARCHITECTURE if k not in fields]
   if missing:
-    raise ValueError(f"{path} is not a synergy file: its meta has no {missing[0]}")
+    raise BadInput(f"{path} is not a synergy file: its meta has no {missing[0]}")
   try:
     config = TrainConfig(**{k: tuple(v) if isinstance(v, list) else v  # JSON has no tuples
                             for k, v in architecture(fields).items()}).validate()
   except (TypeError, ValueError) as err:
-    raise ValueError(f"{path} is not a synergy file: {err}") from None
+    raise BadInput(f"{path} is not a synergy file: {err}") from None
   # the hand's 20 actuators, unless the file's noise says otherwise (a malformed one: its
   # shape is then named below)
   action_size = np.shape(flat["log_std"])[-1] if np.ndim(flat.get("log_std", 0)) else 20
@@ -309,19 +310,19 @@ def _check_file(path, meta, flat: dict) -> None:
   have = {k: tuple(np.shape(v)) for k, v in flat.items()}
   for name in sorted(set(want) | set(have)):
     if want.get(name) != have.get(name):
-      raise ValueError(f"{path} does not hold the {config.decoder} decoder its meta describes: "
-                       f"{name} is {have.get(name, 'absent')} there, {want.get(name, 'absent')} "
-                       f"for that decoder")
+      raise BadInput(f"{path} does not hold the {config.decoder} decoder its meta describes: "
+                     f"{name} is {have.get(name, 'absent')} there, {want.get(name, 'absent')} "
+                     f"for that decoder")
   for name, value in sorted(flat.items()):
     if not np.issubdtype(np.asarray(value).dtype, np.number):
-      raise ValueError(f"{path} is not a synergy file: {name} holds {np.asarray(value).dtype}, "
-                       "not numbers")
+      raise BadInput(f"{path} is not a synergy file: {name} holds {np.asarray(value).dtype}, "
+                     "not numbers")
     if not np.isfinite(value).all():
-      raise ValueError(f"{path} is not a synergy file: {name} holds NaN or infinite values")
+      raise BadInput(f"{path} is not a synergy file: {name} holds NaN or infinite values")
 
 
 def load_decoder(path, config) -> dict:
-  """The decoder params of `path` for a run of `config`; ValueError in one line when the
+  """The decoder params of `path` for a run of `config`; BadInput in one line when the
   decoder is not the one the config describes, or drives another hand."""
   meta, params = read(path)
   hand = meta.get("hand")  # a synergy file of format 2 names the actuators it drives
@@ -330,19 +331,19 @@ def load_decoder(path, config) -> dict:
 
     wanted = tuple(hands.actuators(config.hand))
     if tuple(hand["actuators"]) != wanted and sorted(hand["actuators"]) == sorted(wanted):
-      raise ValueError(f"{path} drives the {hand['name']} hand's actuators in another order than "
-                       f"{hands.label(config.hand)}'s action order: its decoder's rows would "
-                       "move the wrong joints")
+      raise BadInput(f"{path} drives the {hand['name']} hand's actuators in another order than "
+                     f"{hands.label(config.hand)}'s action order: its decoder's rows would "
+                     "move the wrong joints")
     if tuple(hand["actuators"]) != wanted:
-      raise ValueError(f"{path} drives the {hand['name']} hand ({len(hand['actuators'])} "
-                       f"actuators), not {hands.label(config.hand)} "
-                       f"({len(hands.actuators(config.hand))} actuators)")
+      raise BadInput(f"{path} drives the {hand['name']} hand ({len(hand['actuators'])} "
+                     f"actuators), not {hands.label(config.hand)} "
+                     f"({len(hands.actuators(config.hand))} actuators)")
   for name in ARCHITECTURE:
     if name not in EVERY_KIND and name not in decoders.kind(meta["decoder"]).fields:
       continue
     if meta[name] != getattr(config, name):
-      raise ValueError(f"the decoder in {path} has {name} = {meta[name]!r}, the config asks for "
-                       f"{getattr(config, name)!r}")
+      raise BadInput(f"the decoder in {path} has {name} = {meta[name]!r}, the config asks for "
+                     f"{getattr(config, name)!r}")
   return params
 
 

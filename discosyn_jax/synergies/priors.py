@@ -22,6 +22,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from discosyn_jax.checks import BadInput
 from discosyn_jax.env import hand_env, hands
 from discosyn_jax.env.task import not_finite
 from discosyn_jax.synergies import fitting
@@ -33,19 +34,19 @@ CHUNK = 64  # states whose pushes are stepped at once (bounds the memory of MJX 
 
 
 def _object_dofs(env) -> list[int]:
-  """The qvel addresses of what is not the hand; ValueError where there is nothing to move."""
+  """The qvel addresses of what is not the hand; BadInput where there is nothing to move."""
   if not hasattr(env, "mj_model"):
-    raise ValueError(f"a prior needs hand tasks; {type(env).__name__} has no physics")
+    raise BadInput(f"a prior needs hand tasks; {type(env).__name__} has no physics")
   hand_v = set(hands.qvel_indices(env.mj_model).tolist())
   dofs = [i for i in range(env.mj_model.nv) if i not in hand_v]
   if not dofs:
-    raise ValueError(f"the objects prior needs objects that move: {type(env.task).__name__}'s "
-                     "scene has none")
+    raise BadInput(f"the objects prior needs objects that move: {type(env.task).__name__}'s "
+                   "scene has none")
   return dofs
 
 
 def check(envs) -> None:
-  """ValueError in one line where the prior cannot be made (before a run folder is)."""
+  """BadInput in one line where the prior cannot be made (before a run folder is)."""
   for env in envs:
     _object_dofs(env)
 
@@ -68,8 +69,8 @@ def jacobians(env, response: str = "objects", act=None) -> np.ndarray:
   for (one output). `act(obs, key) -> actions` is the policy whose states are read (jittable,
   batched); None: a uniform random one, the prior's."""
   if response not in RESPONSES:
-    raise ValueError(f"the prior's response must be one of {', '.join(RESPONSES)}, not "
-                     f"{response!r}")
+    raise BadInput(f"the prior's response must be one of {', '.join(RESPONSES)}, not "
+                   f"{response!r}")
   env = reference(env)
   try:
     cpu = jax.devices("cpu")[0]
@@ -121,7 +122,7 @@ def _jacobians(env, response: str, act) -> np.ndarray:
   # a NaN in a task's reward leaves the eigen-decomposition without convergence: named here
   bad = [part for part, ok in finite.items() if not np.all(ok)]
   if bad:
-    raise ValueError(not_finite(type(env.task).__name__, bad,
+    raise BadInput(not_finite(type(env.task).__name__, bad,
                                 f"at the states the {response} prior is measured at "
                                 "(the decoder's start, before training)"))
   return np.asarray(jac)
@@ -141,8 +142,8 @@ def pool(metrics: list[np.ndarray], b: int, pooling: str = "trace") -> np.ndarra
   each task its share, in turns: task after task, the top direction of what its metric
   keeps outside the directions chosen so far."""
   if pooling not in POOLINGS:
-    raise ValueError(f"the prior's pooling must be one of {', '.join(POOLINGS)}, not "
-                     f"{pooling!r}")
+    raise BadInput(f"the prior's pooling must be one of {', '.join(POOLINGS)}, not "
+                   f"{pooling!r}")
   if pooling == "trace":
     values, vectors = np.linalg.eigh(sum(metrics))
     return vectors[:, np.argsort(values)[::-1][:b]]
@@ -168,8 +169,8 @@ def own(metrics: list[np.ndarray], shared: np.ndarray, k: int) -> np.ndarray:
   rank = int(np.linalg.matrix_rank(shared)) if shared.shape[1] else 0
   rest = u[:, rank:]
   if rest.shape[1] < k:
-    raise ValueError(f"{k} own synergies do not fit beside a {rank}-dimensional shared space "
-                     f"in {size} actions")
+    raise BadInput(f"{k} own synergies do not fit beside a {rank}-dimensional shared space "
+                   f"in {size} actions")
   out = []
   for metric_ in metrics:
     values, vectors = np.linalg.eigh(rest.T @ metric_ @ rest)

@@ -10,6 +10,7 @@ import jax.numpy as jnp
 import mujoco
 import numpy as np
 
+from discosyn_jax.checks import BadInput
 from discosyn_jax.env import hands
 
 # The "fast" physics profile's settings our tasks declare (Task.fast_physics): each task's
@@ -61,7 +62,7 @@ def capped_speed(delta: jax.Array, dt: float, cap: float) -> jax.Array:
 def require(condition: bool, message: str) -> None:
   """A bad config value: a ValueError that says which and why."""
   if not condition:
-    raise ValueError(message)
+    raise BadInput(message)
 
 
 def require_hinge(config) -> None:

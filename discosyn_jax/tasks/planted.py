@@ -50,6 +50,7 @@ from discosyn_jax import quiet_mjx  # noqa: F401  (first: MJX imported quietly, 
 from brax.envs.base import Env, State
 
 from discosyn_jax import checks
+from discosyn_jax.checks import BadInput
 
 SPAN_SEED = 26  # fixed; changing it plants another span in every run
 ACTION_SIZE = 20
@@ -93,24 +94,24 @@ class PlantedConfig:
   def __post_init__(self):
     checks.fields(self)
     if not 1 <= self.rank <= ACTION_SIZE:
-      raise ValueError(f"rank must be between 1 and {ACTION_SIZE}, not {self.rank}")
+      raise BadInput(f"rank must be between 1 and {ACTION_SIZE}, not {self.rank}")
     if not 1 <= self.task_rank <= self.rank:
-      raise ValueError(f"task_rank must be between 1 and rank ({self.rank}), not {self.task_rank}")
+      raise BadInput(f"task_rank must be between 1 and rank ({self.rank}), not {self.task_rank}")
     if self.index < 0 or self.episode_length < 1 or self.tolerance <= 0:
-      raise ValueError("index must not be negative, episode_length must be at least 1 and "
-                       "tolerance positive")
+      raise BadInput("index must not be negative, episode_length must be at least 1 and "
+                     "tolerance positive")
     if self.outside < 0:
-      raise ValueError(f"outside must not be negative, not {self.outside}")
+      raise BadInput(f"outside must not be negative, not {self.outside}")
     if not 0 <= self.paid_within <= 1:
-      raise ValueError(f"paid_within must be between 0 and 1 (0: paid everywhere), not {self.paid_within}")
+      raise BadInput(f"paid_within must be between 0 and 1 (0: paid everywhere), not {self.paid_within}")
     if self.excursion < 0:
-      raise ValueError(f"excursion must not be negative, not {self.excursion}")
+      raise BadInput(f"excursion must not be negative, not {self.excursion}")
     if self.excursion and (self.slack or self.outside or self.paid_within):
-      raise ValueError("an excursion task pays for reach alone: slack, outside and paid_within "
-                       "shape a posture task's pay, set them to 0")
+      raise BadInput("an excursion task pays for reach alone: slack, outside and paid_within "
+                     "shape a posture task's pay, set them to 0")
     if self.outside and self.slack:
-      raise ValueError("with slack the error outside the span counts for nothing: a target "
-                       "outside it (outside > 0) would ask for nothing")
+      raise BadInput("with slack the error outside the span counts for nothing: a target "
+                     "outside it (outside > 0) would ask for nothing")
 
 
 def default_config(**overrides) -> PlantedConfig:

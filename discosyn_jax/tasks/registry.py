@@ -15,6 +15,7 @@ from typing import Any, Callable
 from discosyn_jax import quiet_mjx  # noqa: F401  (first: MJX imported quietly, before brax)
 from brax.envs.base import Env
 
+from discosyn_jax.checks import BadInput
 from discosyn_jax.env.settings import PHYSICS
 from discosyn_jax.env import hands
 from discosyn_jax.env.hand_env import HandEnv
@@ -58,7 +59,7 @@ def register(name: str, task, default_config: Callable[[], Any] | None = None,
   name."""
   new = _entry(name, task, default_config, summary)
   if REGISTRY.get(name, new) != new:
-    raise ValueError(f"a task named {name!r} is registered already")
+    raise BadInput(f"a task named {name!r} is registered already")
   REGISTRY[name] = new
   return name
 
@@ -68,18 +69,18 @@ def _entry(name: str, task, default_config, summary: str) -> Entry:
   if isinstance(task, type) and issubclass(task, Task):
     missing = sorted(getattr(task, "__abstractmethods__", ()))
     if missing:
-      raise ValueError(f"task {name!r}: {task.__name__} does not define {', '.join(missing)}")
+      raise BadInput(f"task {name!r}: {task.__name__} does not define {', '.join(missing)}")
     return Entry(task, default_config or task.config_class, summary or task.summary)
   if isinstance(task, type) and issubclass(task, Env):
     if default_config is None:
-      raise ValueError(f"task {name!r}: an Env class is registered with its default_config")
+      raise BadInput(f"task {name!r}: an Env class is registered with its default_config")
     return Entry(_as_is, default_config, summary, env=task)
   if callable(task) and not isinstance(task, type):
     if default_config is not None:
-      raise ValueError(f"task {name!r}: a function that makes an env has no default_config")
+      raise BadInput(f"task {name!r}: a function that makes an env has no default_config")
     return Entry(_as_is, NoSettings, summary or f"{name}: an env of one's own", env=_Whole(task))
-  raise ValueError(f"task {name!r}: {task!r} is not a Task class (discosyn_jax.env.task.Task), "
-                   "an Env class or a function that makes an env")
+  raise BadInput(f"task {name!r}: {task!r} is not a Task class (discosyn_jax.env.task.Task), "
+                 "an Env class or a function that makes an env")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -96,8 +97,8 @@ class _Whole:
   def __call__(self, task, **_) -> Env:
     env = self.make_env()
     if not isinstance(env, Env):
-      raise ValueError(f"{getattr(self.make_env, '__name__', self.make_env)!r} returned "
-                       f"{type(env).__name__}, not an env")
+      raise BadInput(f"{getattr(self.make_env, '__name__', self.make_env)!r} returned "
+                     f"{type(env).__name__}, not an env")
     return env
 
 
@@ -111,14 +112,14 @@ def load(spec: str) -> str:
   path made absolute, so that a run's config names it wherever the run is read again."""
   where, _, attr = spec.rpartition(":")
   if not where or not attr:
-    raise ValueError(f"a task of one's own is FILE.py:CLASS or MODULE:CLASS, not {spec!r}")
+    raise BadInput(f"a task of one's own is FILE.py:CLASS or MODULE:CLASS, not {spec!r}")
   if where.endswith(".py"):
     path = pathlib.Path(where).expanduser().resolve()
     name = f"{path}:{attr}"
     if name in REGISTRY:
       return name
     if not path.is_file():
-      raise ValueError(f"no task file {where}")
+      raise BadInput(f"no task file {where}")
     module_spec = importlib.util.spec_from_file_location(f"discosyn_task_{path.stem}", path)
     module = importlib.util.module_from_spec(module_spec)
     try:
@@ -132,9 +133,9 @@ def load(spec: str) -> str:
     try:
       module = importlib.import_module(where)
     except ImportError as err:
-      raise ValueError(f"task {spec!r}: cannot import {where}: {err}") from None
+      raise BadInput(f"task {spec!r}: cannot import {where}: {err}") from None
   if not hasattr(module, attr):
-    raise ValueError(f"{where} defines no {attr}")
+    raise BadInput(f"{where} defines no {attr}")
   return register(name, getattr(module, attr))
 
 
@@ -161,7 +162,7 @@ def entry(name: str) -> Entry:
     loaded = load(name)  # a file named relative to the working folder: known by both names
     REGISTRY.setdefault(name, REGISTRY[loaded])
   if name not in REGISTRY:
-    raise ValueError(f"unknown task {name!r}; known tasks: {', '.join(REGISTRY)}")
+    raise BadInput(f"unknown task {name!r}; known tasks: {', '.join(REGISTRY)}")
   return REGISTRY[name]
 
 
@@ -170,12 +171,12 @@ def make_config(name: str, **overrides) -> TaskConfig:
   fields = {f.name for f in dataclasses.fields(defaults)}
   unknown = sorted(set(overrides) - fields)
   if unknown:
-    raise ValueError(f"task {name!r} has no setting {', '.join(unknown)}; "
-                     f"its settings: {', '.join(sorted(fields))}")
+    raise BadInput(f"task {name!r} has no setting {', '.join(unknown)}; "
+                   f"its settings: {', '.join(sorted(fields))}")
   try:
     return dataclasses.replace(defaults, **overrides)
   except ValueError as err:
-    raise ValueError(f"task {name!r}: {err}") from None
+    raise BadInput(f"task {name!r}: {err}") from None
 
 
 def physics_overrides(name: str, physics: str) -> dict:
@@ -183,7 +184,7 @@ def physics_overrides(name: str, physics: str) -> dict:
   `name`: its own fast settings for "fast", none for "reference" (TaskConfig's own defaults:
   4 ms x 10)."""
   if physics not in PHYSICS:
-    raise ValueError(f"unknown physics {physics!r}; known: {', '.join(PHYSICS)}")
+    raise BadInput(f"unknown physics {physics!r}; known: {', '.join(PHYSICS)}")
   fast = entry(name).fast_physics
   return fast if physics == "fast" else {}
 
@@ -201,7 +202,7 @@ def make(name: str, *, backend: str = "auto", physics: str = "fast", hand: str =
   try:
     task = entry(name).task(config)
   except ValueError as err:
-    raise ValueError(f"task {name!r}: {err}") from None
+    raise BadInput(f"task {name!r}: {err}") from None
   return entry(name).env(task, backend=backend, hand=hand)
 
 
@@ -216,8 +217,8 @@ def expand(names) -> list[str]:
     elif ":" in name or name.endswith(".py"):  # a task of one's own
       out.append(load(name))
     else:
-      raise ValueError(f"unknown task or task set {name!r}; tasks: {', '.join(REGISTRY)}; "
-                       f"sets: {', '.join(TASK_SETS)}")
+      raise BadInput(f"unknown task or task set {name!r}; tasks: {', '.join(REGISTRY)}; "
+                     f"sets: {', '.join(TASK_SETS)}")
   return out
 
 

@@ -22,6 +22,8 @@ import numpy as np
 from jax.sharding import Mesh, NamedSharding
 from jax.sharding import PartitionSpec as P
 
+from discosyn_jax.checks import BadInput
+
 AXIS = "batch"
 
 
@@ -32,7 +34,7 @@ def make_mesh(devices: Sequence[jax.Device] | int | None = None) -> Mesh:
     devices = every
   elif isinstance(devices, int):
     if not 1 <= devices <= len(every):
-      raise ValueError(f"--devices must be between 1 and {len(every)} here, not {devices}")
+      raise BadInput(f"--devices must be between 1 and {len(every)} here, not {devices}")
     devices = every[:devices]
   return Mesh(np.asarray(devices), (AXIS,))
 
@@ -47,14 +49,14 @@ def batched(mesh: Mesh, leading: int = 0) -> NamedSharding:
 
 
 def mesh_for(config, devices=None) -> Mesh:
-  """The mesh a training config runs on; ValueError naming the first batch size (envs per
+  """The mesh a training config runs on; BadInput naming the first batch size (envs per
   task, samples per minibatch) that does not split evenly over its devices."""
   mesh = make_mesh(devices)
   sizes = {"num_envs": config.num_envs,
            "minibatch_size": config.num_envs * config.unroll_length // config.num_minibatches}
   for name, size in sizes.items():
     if size % mesh.size:
-      raise ValueError(f"{name} = {size} does not split over {mesh.size} devices")
+      raise BadInput(f"{name} = {size} does not split over {mesh.size} devices")
   return mesh
 
 

@@ -22,6 +22,7 @@ import jax
 
 from discosyn_jax import atomic, checks
 from discosyn_jax import config as config_lib
+from discosyn_jax.checks import BadInput
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.env.task import label, not_finite
 from discosyn_jax.run import checkpoints, layout, logs, owner, progress as progress_lib, reading, stop
@@ -125,8 +126,8 @@ def _count(n: int, noun: str) -> str:
 def _same_config(wanted: TrainConfig, given: TrainConfig, run_dir: pathlib.Path) -> None:
   """The trainer must run the config the folder calls for (a resumed run's own)."""
   if wanted != given:
-    raise ValueError(f"{run_dir}: the trainer's config is not the run's "
-                     f"({'; '.join(config_lib.mismatches(wanted, given)) or 'steps or logging differ'})")
+    raise BadInput(f"{run_dir}: the trainer's config is not the run's "
+                   f"({'; '.join(config_lib.mismatches(wanted, given)) or 'steps or logging differ'})")
 
 
 def _run(trainer: Trainer, run_dir: pathlib.Path, resume: bool, writer: owner.Writer,

@@ -32,6 +32,7 @@ from jax.sharding import PartitionSpec as P
 
 from discosyn_jax.agent import networks, policy, ppo, residual
 from discosyn_jax.agent.networks import DiscoSyn
+from discosyn_jax.checks import BadInput
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import wrappers
 from discosyn_jax.synergies import diagnostics
@@ -71,14 +72,14 @@ class Trainer:
     self.mesh = devices_lib.mesh_for(config, devices)
     self.envs = list(envs)
     if len(self.envs) != len(config.tasks):
-      raise ValueError(f"{len(self.envs)} envs given for {len(config.tasks)} tasks")
+      raise BadInput(f"{len(self.envs)} envs given for {len(config.tasks)} tasks")
     sizes = {env.action_size for env in self.envs}
     if len(sizes) != 1:
-      raise ValueError(f"the tasks' action sizes differ: {sorted(sizes)}")
+      raise BadInput(f"the tasks' action sizes differ: {sorted(sizes)}")
     self.action_size = sizes.pop()
     if config.own_synergies and config.n_synergies + config.own_synergies > self.action_size:
-      raise ValueError(f"{config.n_synergies} shared + {config.own_synergies} own synergies are more "
-                       f"than the hand's {self.action_size} actions")
+      raise BadInput(f"{config.n_synergies} shared + {config.own_synergies} own synergies are more "
+                     f"than the hand's {self.action_size} actions")
     self.obs_sizes = tuple(env.observation_size for env in self.envs)
     self.model = networks.build(config, self.obs_sizes, self.action_size)
     self.optimizer = ppo.optimizer(config)
@@ -389,11 +390,11 @@ def _with_start(params, decoder_params, own):
     if given is None:
       continue
     if name not in inner:
-      raise ValueError(f"this model has no {what} to replace")
+      raise BadInput(f"this model has no {what} to replace")
     want = jax.tree.map(jnp.shape, inner[name])
     got = jax.tree.map(jnp.shape, given)
     if want != got:
-      raise ValueError(f"the given {given_is} not fit this model: {got} != {want}")
+      raise BadInput(f"the given {given_is} not fit this model: {got} != {want}")
     inner[name] = given
   return {**params, "params": inner}
 

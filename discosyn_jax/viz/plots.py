@@ -17,6 +17,7 @@ matplotlib.use("Agg")  # files only, no display
 import matplotlib.pyplot as plt  # noqa: E402
 
 from discosyn_jax import config as config_lib  # noqa: E402
+from discosyn_jax.checks import BadInput  # noqa: E402
 from discosyn_jax.run import folder, layout  # noqa: E402
 
 # losses.png panels: one line per task (columns `task/name`), or one shared column
@@ -28,10 +29,10 @@ def read_run(run_dir: pathlib.Path) -> tuple[config_lib.TrainConfig, list[dict],
   """(config, metrics rows, eval rows) of a run directory (folder.read)."""
   run_dir = pathlib.Path(run_dir)
   if not (run_dir / layout.CONFIG_FILE).is_file():
-    raise ValueError(f"{run_dir} holds no run (no config.json)")
+    raise BadInput(f"{run_dir} holds no run (no config.json)")
   run = folder.read(run_dir)
   if not run.metrics:
-    raise ValueError(f"{run_dir} holds no training steps yet")
+    raise BadInput(f"{run_dir} holds no training steps yet")
   return run.config, run.metrics, run.evaluations
 
 

@@ -14,6 +14,8 @@ from typing import Iterable, Iterator
 import mujoco
 import numpy as np
 
+from discosyn_jax.checks import BadInput
+
 
 def frames(model: mujoco.MjModel, data: mujoco.MjData, cameras=("front", "oblique"),
            height: int = 360, width: int = 480) -> np.ndarray:
@@ -39,7 +41,7 @@ def check_size(model: mujoco.MjModel, height: int, width: int) -> None:
   for name, value, most in (("height", height, model.vis.global_.offheight),
                             ("width", width, model.vis.global_.offwidth)):
     if not 1 <= value <= most:
-      raise ValueError(f"--{name} must be between 1 and {most} pixels, not {value}")
+      raise BadInput(f"--{name} must be between 1 and {most} pixels, not {value}")
 
 
 def check_new(paths, force: bool) -> None:
@@ -48,4 +50,4 @@ def check_new(paths, force: bool) -> None:
     return
   for path in paths:
     if pathlib.Path(path).exists():
-      raise ValueError(f"{path} already exists; pass --force to replace it")
+      raise BadInput(f"{path} already exists; pass --force to replace it")

@@ -22,6 +22,7 @@ import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
 from discosyn_jax.agent.networks import DiscoSyn  # noqa: E402
+from discosyn_jax.checks import BadInput  # noqa: E402
 from discosyn_jax.env import hands, scene
 from discosyn_jax.viz import render  # noqa: E402
 
@@ -116,10 +117,10 @@ def write(trainer, params, out_dir: pathlib.Path, *, k: float = 1.0, force: bool
   """Write postures.png (and matrix.png for a linear decoder) into `out_dir`."""
   decoder, kind = trainer.config.decoder, trainer.config.kind
   if kind.full_action:
-    raise ValueError(f"this run's decoder is {decoder!r} (the full action): it has no synergies "
-                     "to picture")
+    raise BadInput(f"this run's decoder is {decoder!r} (the full action): it has no synergies "
+                   "to picture")
   if not 0 < k < math.inf:  # NaN too
-    raise ValueError(f"--k must be a positive finite number, not {k}")
+    raise BadInput(f"--k must be a positive finite number, not {k}")
   out_dir = pathlib.Path(out_dir)
   paths = [out_dir / POSTURES_FILE] + ([out_dir / MATRIX_FILE] if kind.linear else [])
   render.check_new(paths, force)

@@ -19,6 +19,7 @@ import numpy as np
 from PIL import Image
 
 from discosyn_jax import checks
+from discosyn_jax.checks import BadInput
 from discosyn_jax.viz import render
 
 FORMATS = (".mp4", ".gif")
@@ -26,7 +27,7 @@ FORMATS = (".mp4", ".gif")
 
 def task_index(config, task: str) -> int:
   if task not in config.tasks:
-    raise ValueError(f"task {task!r} is not one of this run's tasks: {', '.join(config.tasks)}")
+    raise BadInput(f"task {task!r} is not one of this run's tasks: {', '.join(config.tasks)}")
   return config.tasks.index(task)
 
 
@@ -81,24 +82,24 @@ def render_policy(trainer, state, task: str, out: pathlib.Path, *, episodes: int
   out = pathlib.Path(out)
   wanted = (".png",) if frame is not None else FORMATS
   if out.suffix.lower() not in wanted:
-    raise ValueError(f"{out}: the output must end in {' or '.join(wanted)}")
+    raise BadInput(f"{out}: the output must end in {' or '.join(wanted)}")
   env = trainer.envs[task_index(trainer.config, task)]
   model = env.mj_model
   # every request checked before the rollout, which takes a while
   render.check_size(model, height, width)
   if frame is not None and not 0 <= frame < env.episode_length:
-    raise ValueError(f"--frame must be between 0 and {env.episode_length - 1} (the control steps "
-                     f"of an episode), not {frame}")
+    raise BadInput(f"--frame must be between 0 and {env.episode_length - 1} (the control steps "
+                   f"of an episode), not {frame}")
   checks.seed(seed, "--seed")
   if episodes < 1:
-    raise ValueError(f"--episodes must be at least 1, not {episodes}")
+    raise BadInput(f"--episodes must be at least 1, not {episodes}")
   render.check_new([out], force)
   datas, ret, success = episode_states(trainer, state, task, episodes, seed)
   out.parent.mkdir(parents=True, exist_ok=True)
   if frame is not None:
     if frame >= len(datas[0]):
-      raise ValueError(f"--frame {frame} is past the end of the episode, which ended after "
-                       f"{len(datas[0])} steps")
+      raise BadInput(f"--frame {frame} is past the end of the episode, which ended after "
+                     f"{len(datas[0])} steps")
     Image.fromarray(render.frames(model, datas[0][frame], cameras, height, width)).save(out)
     count = 1
   else:

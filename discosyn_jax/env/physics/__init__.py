@@ -17,6 +17,7 @@ from __future__ import annotations
 import jax
 import mujoco
 
+from discosyn_jax.checks import BadInput
 from discosyn_jax.env.settings import BACKENDS as _CHOICES
 from discosyn_jax.env.physics.view import PhysicsView
 
@@ -29,7 +30,7 @@ def resolve(backend: str) -> str:
   if backend == "auto":
     return "native" if jax.default_backend() == "cpu" else "mjx"
   if backend not in BACKENDS:
-    raise ValueError(f"unknown physics backend {backend!r}; known: auto, {', '.join(BACKENDS)}")
+    raise BadInput(f"unknown physics backend {backend!r}; known: auto, {', '.join(BACKENDS)}")
   return backend
 
 

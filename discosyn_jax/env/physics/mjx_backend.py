@@ -12,6 +12,7 @@ import mujoco
 from discosyn_jax import quiet_mjx  # noqa: F401  (first: MJX imported quietly, before brax)
 from mujoco import mjx
 
+from discosyn_jax.checks import BadInput
 from discosyn_jax.env.physics.view import PhysicsView
 
 IMPLS = ("jax", "warp")
@@ -26,10 +27,10 @@ def default_impl() -> str:
 
 def check_impl(impl: str, name: str = "MJX implementation") -> str:
   if impl not in IMPLS:
-    raise ValueError(f"{name}: unknown MJX implementation {impl!r}; known: {', '.join(IMPLS)}")
+    raise BadInput(f"{name}: unknown MJX implementation {impl!r}; known: {', '.join(IMPLS)}")
   # MJX carries its own copy of MuJoCo Warp (mujoco.mjx.third_party); it needs warp-lang
   if impl == "warp" and not importlib.util.find_spec("warp"):
-    raise ValueError(f'{name}: MJX implementation "warp" needs warp-lang: pip install ".[warp]"')
+    raise BadInput(f'{name}: MJX implementation "warp" needs warp-lang: pip install ".[warp]"')
   return impl
 
 

@@ -35,6 +35,7 @@ from discosyn_jax import quiet_mjx  # noqa: F401  (first: MJX imported quietly, 
 from flax import struct
 from mujoco import mjx
 
+from discosyn_jax.checks import BadInput
 from discosyn_jax.env.physics.view import PhysicsView
 
 GRAPH_MODES = ("none", "jax", "warp", "warp_staged", "warp_staged_ex")
@@ -92,8 +93,8 @@ def graph_mode() -> str | None:
   captures CUDA graphs itself, `warp`; on the CPU `jax`)."""
   chosen = os.environ.get("DISCOSYN_WARP_GRAPH_MODE", "").strip().lower()
   if chosen and chosen not in GRAPH_MODES:
-    raise ValueError(f"environment variable DISCOSYN_WARP_GRAPH_MODE must be one of "
-                     f"{', '.join(GRAPH_MODES)}, not {chosen!r}")
+    raise BadInput(f"environment variable DISCOSYN_WARP_GRAPH_MODE must be one of "
+                   f"{', '.join(GRAPH_MODES)}, not {chosen!r}")
   return chosen or None
 
 
