@@ -81,7 +81,9 @@ def test_the_prior_is_refused_where_it_cannot_start_the_decoder():
   assert {presets.preset(f"set{n}-disco{b}-linear").decoder_init
           for n, b in ((1, 3), (1, 4), (2, 4), (2, 6))} == {"reward"}
   assert Method.of(default).name == "DiscoSyn3-L-reward"
-  assert Method.of(default.replace(freeze_decoder=True)).name == "Prior3-L-reward"
+  # its start is the default's (auto): frozen, the decoder starts at random unless named
+  assert Method.of(default.replace(freeze_decoder=True)).name == "Random3-L"
+  assert Method.of(default.replace(freeze_decoder=True, decoder_init="reward")).name == "Prior3-L-reward"
   for bad in (dict(decoder="mlp"), dict(decoder_from="x.npz"), dict(decoder_init="pca")):
     with pytest.raises(ValueError):
       config.replace(**bad).validate()

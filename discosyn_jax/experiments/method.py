@@ -157,8 +157,9 @@ class Method:
   def of(cls, source) -> "Method":
     """What a config runs (or a synergy file's meta says it holds): PPO for the full action
     space; a fitted space by its method ('PCA4'); else a decoder, frozen at its own start
-    (Random, Prior) or learned (DiscoSyn). `-zfree`, `-matched` and ` frozen` are the
-    planner's to add: a config alone does not say which control it is."""
+    (Random, Prior) or learned (DiscoSyn); a random one frozen with z free is `-zfree`.
+    `-matched` and ` frozen` are the planner's to add: they name where a config's decoder_from
+    came from, which the config does not say."""
     get = _getter(source)
     floor = get("z_std_floor", 0.0) or 0.0  # the heads held open until paid
     tag = (f"zfloor{floor:g}",) if floor else ()
@@ -173,11 +174,13 @@ class Method:
       return cls(get("method"), get("n_synergies"))
     init = get("decoder_init", "random") or "random"
     init = "random" if init == GIVEN_START else OLD_STARTS.get(init, init)
-    family = "DiscoSyn"
+    family, control = "DiscoSyn", ""
     if get("freeze_decoder") and not get("decoder_from"):
       family = "Random" if init == "random" else "Prior"
+      # a random decoder frozen with the heads' z unbounded: the strongest control
+      control = "zfree" if family == "Random" and not get("squash_z") else ""
     decay = 0.0 if get("freeze_decoder") else (get("decoder_weight_decay", 0.0) or 0.0)
-    return cls(family, get("n_synergies"), kind.letter, own=get("own_synergies", 0) or 0,
+    return cls(family, get("n_synergies"), kind.letter, control, own=get("own_synergies", 0) or 0,
                start="" if init == "random" else init, decay=decay,
                decay_steps=(get("decoder_weight_decay_steps", 0) or 0) if decay else 0,
                tag=tag, residual=Residual.of(source))

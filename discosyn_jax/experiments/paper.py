@@ -63,7 +63,7 @@ from discosyn_jax.run import layout
 from discosyn_jax.synergies import fitting
 from discosyn_jax import assemble
 from discosyn_jax.training import evaluation
-from discosyn_jax.experiments import presets, record
+from discosyn_jax.experiments import presets, record, rows
 from discosyn_jax.experiments.method import Method, Residual
 
 # the task sets of discosyn_jax/tasks/sets.py, the unseen tasks split by the set whose synergies they take
@@ -75,9 +75,9 @@ BASELINES = (("PCA", 4), ("AE", 4), ("PCA", 6), ("AE", 6))  # trained in, as in 
 FITTED_SIZES = (3, 4, 6)  # explained variance reported for these
 # each seed's default decoder (the preset's start: the reward prior): the same run, in the
 # same folder, as that set's DiscoSyn<b>-L-reward row
-_LINEAR, _MLP = decoders.LINEAR.name, decoders.MLP.name
-TRANSFER_FROM = {"unseen-set1": ("set1", 3, _LINEAR), "unseen-set2": ("set2", 6, _LINEAR),
-                 "sparse": ("set1", 3, _LINEAR)}
+TRANSFER_FROM = {"unseen-set1": ("set1", Method.parse("DiscoSyn3-L-reward")),
+                 "unseen-set2": ("set2", Method.parse("DiscoSyn6-L-reward")),
+                 "sparse": ("set1", Method.parse("DiscoSyn3-L-reward"))}
 # the rows of the paper's Tables I and II with today's defaults, what `all` runs of
 # discosyn-<set> and baselines-<set>: DiscoSyn from each set's default start (the paper's
 # DiscoSyn<b>-L is today's DiscoSyn<b>-L-reward), the controls it must beat (a random
@@ -228,7 +228,7 @@ class Fit:
 
 def fitted_meta(method: str, k: int, hidden: tuple[int, ...]) -> dict[str, Any]:
   """The meta of a fitted synergy file: the decoder it is, and the method that made it."""
-  return dict(decoder=_LINEAR if method == "PCA" else _MLP, n_synergies=k, decoder_bias=True,
+  return dict(decoder=(decoders.LINEAR if method == "PCA" else decoders.MLP).name, n_synergies=k, decoder_bias=True,
               decoder_hidden=hidden, method=method)
 
 
@@ -287,8 +287,38 @@ class Planner:
   def _folder(self, method: Method | str, task_set: str) -> str:
     return f"{str(method).lower()}-{task_set}-{self.tag}"
 
-  def discosyn(self, task_set: str, b: int, kind: str, variant: str = "") -> Train:
-    config = self._config(presets.preset(f"{task_set}-disco{b}-{kind}{variant}"), task_set)
+  def row(self, method: Method, task_set: str) -> TrainConfig:
+    """The config of row `method` on `task_set` at this scale and seed (rows.config_for)."""
+    return self._config(rows.config_for(method, task_set, **self.sizes.train_for(task_set)),
+                        task_set)
+
+  def with_residual(self, method: Method, task_set: str) -> Method:
+    """`method` beside the preset residual (presets.RESIDUAL: its ramp a share of the run),
+    in this scale's train steps."""
+    steps = self.sizes.train_for(task_set)["steps"]
+    return method.replace(residual=Residual(presets.RESIDUAL_CAP,
+                                            round(presets.RESIDUAL["residual_ramp"] * steps)))
+
+  def learned_rows(self, task_set: str) -> list[Method]:
+    """The DiscoSyn rows of discosyn-<set>: on the hand's sets the paper's random start, the
+    mlp decoder, both priors' starts and the reward prior's beside a residual; on the test
+    bed the paper's, the mlp and the decayed variant (measured to work there,
+    docs/notes/2026-12-02-a-planted-test-bed.md)."""
+    linear, mlp = decoders.LINEAR.letter, decoders.MLP.letter
+    out = []
+    for b in DISCOSYN_SIZES[task_set]:
+      paper, reward = Method("DiscoSyn", b, linear), Method("DiscoSyn", b, linear, start="reward")
+      if task_set in presets.DECAYED_SETS:
+        out += [paper, Method("DiscoSyn", b, mlp),
+                paper.replace(decay=presets.DECAY["decoder_weight_decay"],
+                              decay_steps=presets.DECAY["decoder_weight_decay_steps"])]
+      else:
+        out += [paper, Method("DiscoSyn", b, mlp), paper.replace(start="objects"), reward,
+                self.with_residual(reward, task_set)]
+    return out
+
+  def discosyn(self, task_set: str, method: Method) -> Train:
+    config = self.row(method, task_set)
     method = Method.of(config)
     return Train(self._folder(method, task_set), config,
                  _meta(f"discosyn-{task_set}", method, task_set, self.seed, self.scale))
@@ -333,8 +363,7 @@ class Planner:
     return steps
 
   def ppo(self, task_set: str, experiment: str) -> Train:
-    base = presets.preset("set1-ppo")  # the same PPO settings for every set
-    return Train(self._folder("PPO", task_set), self._config(base, task_set),
+    return Train(self._folder("PPO", task_set), self.row(Method("PPO"), task_set),
                  _meta(experiment, "PPO", task_set, self.seed, self.scale))
 
   def baselines(self, task_set: str) -> list:
@@ -360,13 +389,15 @@ class Planner:
     RESIDUAL_SUFFIX the source learned beside a residual, and the frozen run and its
     controls act with the same cap, ramped in over the first half of their own run (as the
     source's was over its)."""
-    source_set, b, kind = TRANSFER_FROM[task_set]
-    base = presets.preset(f"{source_set}-disco{b}-{kind}{variant}")
+    source_set, row = TRANSFER_FROM[task_set]
+    if variant == presets.RESIDUAL_SUFFIX:
+      row = self.with_residual(row, source_set)
+    base = self.row(row, source_set)
     if self.decoder_from:
       meta, _ = fitting.read(self.decoder_from)
       source, path, method = None, self.decoder_from, Method.of(meta)
     else:
-      source = self.discosyn(source_set, b, kind, variant)
+      source = self.discosyn(source_set, row)
       meta, method = fitting.meta_of(source.config), source.method
       path = self.out / source.name / layout.DECODER_FILE  # the record of its run
     changes = fitting.frozen_fields(meta, path)
@@ -408,8 +439,11 @@ class Planner:
   def plan(self, experiment: str) -> list:
     if experiment in TABLES:  # one table's rows: a part of `all`, hours rather than a day on 2 cores
       task_set = TABLES[experiment]
-      return select(self.plan(f"discosyn-{task_set}") + self.plan(f"baselines-{task_set}"),
-                    PAPER_ROWS[task_set])
+      planned = self.plan(f"discosyn-{task_set}") + self.plan(f"baselines-{task_set}")
+      known = {step.method for step in planned if isinstance(step, Train)}
+      # a row the experiments do not train is composed from its name (rows.config_for)
+      added = [self.discosyn(task_set, m) for m in PAPER_ROWS[task_set] if m not in known]
+      return select(planned + added, PAPER_ROWS[task_set])
     if experiment == "all":  # set #2 last: its runs are the long ones
       parts = [self.plan("table1"), self.frozen_rows("sparse"), self.frozen_rows("transfer"),
                self.plan("table2")]
@@ -417,21 +451,13 @@ class Planner:
       for step in (step for part in parts for step in part):
         steps.setdefault(step.name, step)
       return list(steps.values())
-    if experiment.startswith("discosyn-") and experiment[9:] in DISCOSYN_SIZES:
-      task_set = experiment[9:]
-      # the decayed variant where it is measured to work (docs/notes/2026-12-02-a-planted-test-bed.md)
-      # on the hand's sets both starts of the linear decoder, the paper's and the objects
-      # prior's; on the test bed the paper's and the decayed variant (measured to work there)
-      kinds = (((_LINEAR, ""), (_MLP, ""), (_LINEAR, presets.DECAYED))
-               if task_set in presets.DECAYED_SETS else
-               ((_LINEAR, presets.PAPER), (_MLP, ""), (_LINEAR, presets.OBJECTS_SUFFIX),
-                (_LINEAR, presets.REWARDED), (_LINEAR, presets.RESIDUAL_SUFFIX)))
-      runs = [self.discosyn(task_set, b, kind, variant) for b in DISCOSYN_SIZES[task_set]
-              for kind, variant in kinds]
+    family, _, task_set = experiment.partition("-")  # discosyn-<set>, baselines-<set>
+    if family == "discosyn" and task_set in DISCOSYN_SIZES:
+      runs = [self.discosyn(task_set, method) for method in self.learned_rows(task_set)]
       steps = [step for run in runs for step in (run, *self.controls(run, task_set, experiment))]
       return list({step.name: step for step in steps}.values())  # one Random<b>-L for both
-    if experiment.startswith("baselines-") and experiment[10:] in DISCOSYN_SIZES:
-      return self.baselines(experiment[10:])
+    if family == "baselines" and task_set in DISCOSYN_SIZES:
+      return self.baselines(task_set)
     if experiment in ("transfer", "sparse"):  # the paper's rows, then the residual's
       return self.frozen_rows(experiment, ("", presets.RESIDUAL_SUFFIX))
     raise BadInput(f"unknown experiment {experiment!r}; experiments: {', '.join(EXPERIMENTS)}")
