@@ -16,7 +16,7 @@ from typing import Any, Callable
 from discosyn_jax import checks
 from discosyn_jax import config as config_lib
 from discosyn_jax.config import TrainConfig
-from discosyn_jax.run import checkpoints, layout, owner, reading
+from discosyn_jax.run import checkpoints, jax_setup, layout, owner, reading
 from discosyn_jax.tasks import registry
 from discosyn_jax.training import loop
 from discosyn_jax.training.trainer import Trainer, TrainState
@@ -24,7 +24,9 @@ from discosyn_jax.viz import plots
 
 
 def trainer(config: TrainConfig, **kwargs) -> Trainer:
-  """A Trainer of `config` on its tasks' envs; `kwargs` go to Trainer (devices)."""
+  """A Trainer of `config` on its tasks' envs; `kwargs` go to Trainer (devices). JAX is set
+  up first, once a process (run/jax_setup.py: the persistent compile cache on)."""
+  jax_setup.setup_jax()
   return Trainer(config, registry.make_envs(config), **kwargs)
 
 

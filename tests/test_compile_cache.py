@@ -21,8 +21,19 @@ def test_the_cache_folder_follows_the_environment(monkeypatch, tmp_path):
     jax.config.update("jax_compilation_cache_dir", before)
 
 
-def test_setting_up_jax_turned_it_on():
-  from discosyn_jax import tasks  # noqa: F401  (sets JAX up, as the CLI does before a command)
+def test_an_env_changes_nothing_global_and_a_run_turns_the_cache_on(monkeypatch, tmp_path):
+  from discosyn_jax import assemble, tasks
+  from discosyn_jax.config import TrainConfig
+  from discosyn_jax.run import jax_setup
 
-  if compile_cache.folder() is not None:  # unless this run says off
-    assert jax.config.jax_compilation_cache_dir == str(compile_cache.folder())
+  monkeypatch.setenv(compile_cache.ENV_VAR, str(tmp_path / "jax"))
+  monkeypatch.setattr(jax_setup, "_ready", False)  # as in a new process
+  before = jax.config.jax_compilation_cache_dir
+  try:
+    tasks.make("planted0")
+    assert jax.config.jax_compilation_cache_dir == before
+    assemble.trainer(TrainConfig(tasks=("planted0",), decoder_init="random", num_envs=2,
+                                 unroll_length=2, num_minibatches=1))
+    assert jax.config.jax_compilation_cache_dir == str(tmp_path / "jax")
+  finally:
+    jax.config.update("jax_compilation_cache_dir", before)

@@ -64,7 +64,7 @@ def test_brax_training_wrappers_run_it():
 def test_brax_own_ppo_trains_and_evaluates_on_a_task():
   """Brax's trainer wraps the env in its own wrappers (EvalWrapper adds a "reward" metric):
   their keys must survive the env's step. (What Brax calls of JAX that JAX removed is given
-  back by setup_jax, which the registry runs: tests/test_take_home.py runs it from a script.)"""
+  back as Brax is imported, quiet_mjx.py: tests/test_brax_user.py runs it from a script.)"""
   from brax.training.agents.ppo import train as brax_ppo
 
   evaluations = []

@@ -1,8 +1,9 @@
 """Once per process, before this package's JAX work: MJX imported quietly (quiet_mjx.py), the
 persistent compile cache turned on (compile_cache.py), and what Brax's own trainers still call
 of JAX where JAX has removed it (quiet_mjx.brax_compatible: also done as Brax is imported,
-whenever that is). The task registry and the command line call it (so `ds.make_env` has);
-`import discosyn_jax` does not, so that `discosyn --help` answers without JAX."""
+whenever that is). The assembler of a run and the command line call it; `ds.make_env` and
+`import discosyn_jax` do not (an env changes nothing global; `discosyn --help` answers
+without JAX)."""
 
 from __future__ import annotations
 

@@ -20,7 +20,6 @@ from discosyn_jax.env.settings import PHYSICS
 from discosyn_jax.env import hands
 from discosyn_jax.env.hand_env import HandEnv
 from discosyn_jax.env.task import Task, TaskConfig, TaskError, label, traceback_frames  # noqa: F401
-from discosyn_jax.run import jax_setup
 from discosyn_jax.tasks import dice, planted, screw, valve, valve_goal, weight_pull
 from discosyn_jax.tasks.sets import TASK_SETS
 
@@ -195,9 +194,11 @@ def make(name: str, *, backend: str = "auto", physics: str = "fast", hand: str =
   task has none and ignores it, as it ignores `hand`), with the physics profile `physics`
   (env/settings.py: PHYSICS) and `hand` (discosyn_jax.env.hands.load: a shipped hand or an MJCF file).
 
-  `overrides` replace fields of the task's default config (e.g. frictionloss=0.2).
+  `overrides` replace fields of the task's default config (e.g. frictionloss=0.2). It
+  changes nothing global: a run turns the compile cache on where it is assembled
+  (discosyn_jax/assemble.py), and Brax finds what it needs of JAX when it is imported
+  (quiet_mjx.py).
   """
-  jax_setup.setup_jax()  # once: the compile cache, and what Brax's trainers need of JAX
   config = make_config(name, **{**physics_overrides(name, physics), **overrides})
   try:
     task = entry(name).task(config)
