@@ -19,7 +19,7 @@ from discosyn_jax.run import checkpoints, layout, logs, reading
 from discosyn_jax.synergies import fitting
 from discosyn_jax.training.trainer import _episode_metrics
 from discosyn_jax import assemble
-from discosyn_jax.experiments import paper, presets, record, report, report_runs
+from discosyn_jax.experiments import paper, presets, record, report, report_runs, rows
 from discosyn_jax.experiments.method import Method
 from tests import reference
 from tests import toy_env
@@ -27,7 +27,7 @@ from tests import toy_env
 toy_env.register()  # tasks a, b, g
 SETS = {"set1": ("a", "b"), "sparse": ("g",)}
 DECODER = "params.params.synergy_decoder."
-PRESETS = presets.PRESETS  # the hand's, before the toy envs' start replaces them
+COMPOSED = rows.config_for  # the rows' own, before the toy envs' start replaces it
 
 
 
@@ -35,11 +35,15 @@ PRESETS = presets.PRESETS  # the hand's, before the toy envs' start replaces the
 @pytest.fixture(scope="module", autouse=True)
 def paper_start():
   """The toy envs have no physics: the plans here start from the paper's random decoder
-  (the priors, the presets' start on the hand, is tested in test_priors.py)."""
+  (the priors, the rows' start on the hand, are tested in test_priors.py)."""
+  composed = rows.config_for
+
+  def at_random(method, task_set, **fields):
+    config = composed(method, task_set, **fields)
+    return config.replace(decoder_init="random") if config.kind.linear else config
+
   with pytest.MonkeyPatch.context() as patch:
-    patch.setattr(presets, "PRESETS", {name: config.replace(decoder_init="random")
-                                       if config.decoder == "linear" else config
-                                       for name, config in presets.PRESETS.items()})
+    patch.setattr(rows, "config_for", at_random)
     yield
 
 
@@ -383,9 +387,9 @@ def test_transfer_from_a_given_decoder(experiments, tmp_path):
 
 
 def test_all_runs_every_row_of_the_papers_tables_once(tmp_path):
-  # the hand's sets and presets, as they are (the paper_start fixture patches them back)
+  # the hand's sets and rows, as they are (the paper_start fixture patches them back)
   with pytest.MonkeyPatch.context() as patch:
-    patch.setattr(presets, "PRESETS", PRESETS)
+    patch.setattr(rows, "config_for", COMPOSED)
     planner = paper.Planner(tmp_path, "cpu", 0)
     steps = planner.plan("all")
     whole = {name: planner.plan(name) for name in ("discosyn-set1", "sparse", "transfer")}
@@ -404,11 +408,11 @@ def test_all_runs_every_row_of_the_papers_tables_once(tmp_path):
   assert {s.meta["method"] for s in frozen.values()} == {"DiscoSyn3-L-reward frozen",
                                                          "DiscoSyn6-L-reward frozen"}
   assert all(s.config.decoder_init == "random" for s in frozen.values())
-  rows = lambda task_set: {s.method for s in steps if s.meta["set"] == task_set
-                           and s.meta["experiment"].split("-")[0] in ("discosyn", "baselines")
-                           and isinstance(s, paper.Train)}
+  methods = lambda task_set: {s.method for s in steps if s.meta["set"] == task_set
+                              and s.meta["experiment"].split("-")[0] in ("discosyn", "baselines")
+                              and isinstance(s, paper.Train)}
   for task_set, paper_rows in paper.PAPER_ROWS.items():
-    assert rows(task_set) == set(paper_rows)
+    assert methods(task_set) == set(paper_rows)
     # every row of the paper's table is there, DiscoSyn<b>-L from today's default start
     assert set(report.PAPER_SOLVED[task_set]) <= {report.paper_row(m) for m in paper_rows}
   # parts in order: set #1's rows, the sparse valve, transfer, set #2's rows last

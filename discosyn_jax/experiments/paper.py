@@ -289,8 +289,8 @@ class Planner:
 
   def row(self, method: Method, task_set: str) -> TrainConfig:
     """The config of row `method` on `task_set` at this scale and seed (rows.config_for)."""
-    return self._config(rows.config_for(method, task_set, **self.sizes.train_for(task_set)),
-                        task_set)
+    return self._config(rows.config_for(method, task_set, tasks=tuple(self.sets[task_set]),
+                                        **self.sizes.train_for(task_set)), task_set)
 
   def with_residual(self, method: Method, task_set: str) -> Method:
     """`method` beside the preset residual (presets.RESIDUAL: its ramp a share of the run),

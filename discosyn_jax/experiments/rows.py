@@ -39,17 +39,17 @@ def tagged(method: Method) -> dict:
   return fields
 
 
-def config_for(method: Method | str, task_set: str, **sizes) -> TrainConfig:
-  """The config of row `method` (a Method or its name) on `task_set`; `sizes` replace the
-  `cpu` size's fields (a scale's), before a residual's ramp and start, in train steps in
-  the name, become shares of the run."""
+def config_for(method: Method | str, task_set: str, **fields) -> TrainConfig:
+  """The config of row `method` (a Method or its name) on `task_set`; `fields` replace the
+  `cpu` size's (a scale's sizes; `tasks` for a set of a plan's own), before a residual's
+  ramp and start, in train steps in the name, become shares of the run."""
   method = Method.parse(method) if isinstance(method, str) else method
   if method.family in ("PCA", "AE") or method.control == "matched" or method.reuse:
     raise BadInput(f"{method}: a row whose space is read from a file; the planner makes the file "
                    "first (paper.py)")
-  if task_set not in TASK_SETS:
+  if task_set not in TASK_SETS and "tasks" not in fields:
     raise BadInput(f"unknown task set {task_set!r}; sets: {', '.join(TASK_SETS)}")
-  base = TrainConfig(tasks=tuple(TASK_SETS[task_set]), **{**presets.CPU_RUN, **sizes})
+  base = TrainConfig(**{"tasks": tuple(TASK_SETS.get(task_set, ())), **presets.CPU_RUN, **fields})
   if method.family == "PPO":
     return base.replace(**presets.PPO, **tagged(method)).validate()
   if (method.family == "Random" and method.start) or (method.family == "Prior" and not method.start):
