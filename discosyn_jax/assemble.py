@@ -75,5 +75,5 @@ def load(path, **changes) -> tuple[Trainer, TrainState]:
   config = config_lib.load(run_dir / layout.CONFIG_FILE)
   built = trainer(config.replace(**changes).validate())
   checks.memory(built.config, built.envs)
-  _, _, state = reading.read_run(path, lambda checkpoint: checkpoints.restore(checkpoint, built.init()))
+  _, _, state = reading.newest(path, lambda checkpoint: checkpoints.restore(checkpoint, built.init()))
   return built, state

@@ -80,7 +80,7 @@ def test_train_evaluate_and_read_a_run_through_the_api(tmp_path):
   # the report reads the same Run, its labels added: the same figures, computed once
   from discosyn_jax.experiments import report_runs
 
-  reported = report_runs.load_run(tmp_path / "run")
+  reported = report_runs.read(tmp_path / "run")
   assert isinstance(reported, ds.Run) and reported.metrics == run.metrics
   assert reported.final == run.at_end(3) and reported.curve == run.curve
 

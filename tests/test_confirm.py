@@ -252,13 +252,13 @@ def test_two_rows_apart_in_a_field_the_name_does_not_carry_are_told_apart(tmp_pa
 
 
 def planted_runs(tmp_path, x_scores, y_scores):
-  """report_runs.Run objects of rows x and y, seed by seed: each a list of {task: success}
+  """report_runs.LabelledRun objects of rows x and y, seed by seed: each a list of {task: success}
   per evaluation."""
   runs = []
   for row, per_seed in (("late", x_scores), ("default", y_scores)):
     for seed, evals in enumerate(per_seed):
       rows = [{"step": i + 1, **{f"{t}/success": v for t, v in e.items()}} for i, e in enumerate(evals)]
-      runs.append(report_runs.Run(path=tmp_path / f"{row}-seed{seed}", config=TrainConfig(),
+      runs.append(report_runs.LabelledRun(path=tmp_path / f"{row}-seed{seed}", config=TrainConfig(),
                                   experiment="confirm-tiny", method=row, task_set="s", seed=seed,
                                   evaluations=rows, metrics=[], finished=True, scale=None,
                                   closing={f"{t}/success": v for t, v in evals[-1].items()}))
@@ -381,7 +381,7 @@ def test_a_row_of_committed_records_is_read_not_run_and_its_configs_checked(tmp_
   assert [s.name for s in confirm.steps(loaded, tmp_path / "out")] == ["new-seed5"]
   assert [p.resolve() for p in confirm.record_paths(loaded)] == [
       (records / f"ppo-seed{s}").resolve() for s in (0, 1)]
-  runs = [report_runs.load_run(p) for p in confirm.record_paths(loaded)]
+  runs = [report_runs.read(p) for p in confirm.record_paths(loaded)]
   (found,) = confirm.verdicts(loaded, runs)
   assert found.runs == (0, 2)
   # a record that is not the row's run, or that is missing, refuses the plan by name

@@ -192,10 +192,10 @@ def test_the_random_decoder_control_keeps_the_learned_runs_initial_decoder(exper
   control = experiments / "sparse-random-seed0"
   meta = json.loads((control / "experiment.json").read_text())
   assert meta["method"] == "Random3-L" and meta["experiment"] == "sparse"
-  config = reading.load_run(control)[0]
-  frozen = reading.load_run(experiments / "sparse-synergies-seed0")[0]
+  config = reading.newest(control, checkpoints.verify)[0]
+  frozen = reading.newest(experiments / "sparse-synergies-seed0", checkpoints.verify)[0]
   assert config == frozen.replace(decoder_from="")  # only the decoder's source differs
-  learned = reading.load_run(experiments / "discosyn3-l-set1-seed0")[0]
+  learned = reading.newest(experiments / "discosyn3-l-set1-seed0", checkpoints.verify)[0]
   start = assemble.trainer(learned).initial_params()["params"]["synergy_decoder"]
   trained = final_decoder(control)
   np.testing.assert_array_equal(trained["synergies.kernel"], start["synergies"]["kernel"])
@@ -235,7 +235,7 @@ def test_finished_steps_are_kept(experiments):
   paper.run("sparse", experiments, "ci", task_sets=SETS,
             log=logs.append)
   assert "[discosyn3-l-set1-seed0] its record, from its final checkpoint" in logs
-  assert record.complete(source, reading.load_run(source)[0])
+  assert record.complete(source, reading.newest(source, checkpoints.verify)[0])
   with np.load(source / "z.npz") as z, np.load(io.BytesIO(before["z.npz"])) as z0:
     np.testing.assert_array_equal(z["a"], z0["a"])
   assert (source / "metrics.jsonl.xz").read_bytes() == before["metrics.jsonl.xz"]

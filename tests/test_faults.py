@@ -498,12 +498,12 @@ def test_a_run_has_one_writer_readers_see_a_consistent_checkpoint_and_a_dead_wri
   assert (run_dir / "config.json").read_bytes() == before["config.json"]
   for _ in range(40):  # readers: never a damaged or vanished checkpoint, and one line
     warnings = []
-    reading.read_run(run_dir, checkpoints.verify, warn=warnings.append)
+    reading.newest(run_dir, checkpoints.verify, warn=warnings.append)
     assert len(warnings) == 1 and warnings[0].startswith(holder), warnings
   assert cli.main(["eval", str(run_dir)]) == 0
   (line,) = capsys.readouterr().err.splitlines()
   assert line.startswith(f"discosyn: warning: {holder}") and ": read its checkpoint " in line
-  assert not report_runs.load_run(run_dir).finished
+  assert not report_runs.read(run_dir).finished
   (line,) = capsys.readouterr().err.splitlines()
   assert line.startswith(f"discosyn: warning: {holder}") and "read its logs as they are now" in line
   proc.kill()  # no chance to release the lock

@@ -132,7 +132,7 @@ def test_a_method_that_is_no_methods_name_is_refused_by_the_report(run, capsys):
   (run / layout.EXPERIMENT_FILE).write_text(json.dumps({**labels, "method": "Disco Syn"}))
   assert folder.read(run).labels["method"] == "Disco Syn"  # a label as such: the report names methods
   with pytest.raises(RecordError, match=r"experiment.json: method: 'Disco Syn' is not a method's name"):
-    report_runs.load_run(run)
+    report_runs.read(run)
   assert cli.main(["report", str(run), "--out", str(run.parent / "report")]) == 2
   assert "experiment.json: method:" in capsys.readouterr().err
   assert not (run.parent / "report").exists()
@@ -184,13 +184,13 @@ def test_a_record_damaged_at_random_is_read_or_refused_in_one_line(run, case):
   the JSON the same, and a valid run whatever it read) or is refused with RecordError in
   one line naming the file; never another exception."""
   rng = random.Random(case)
-  whole = report_runs.load_run(run)
+  whole = report_runs.read(run)
   name = (layout.EVAL_FILE, layout.EXPERIMENT_FILE, layout.CLOSING_FILE)[case % 3]
   original = (run / name).read_bytes()
   damaged = _damage(original, rng)
   (run / name).write_bytes(damaged)
   try:
-    found = report_runs.load_run(run)
+    found = report_runs.read(run)
   except RecordError as err:
     assert str(run / name) in str(err) and "\n" not in str(err)
     return

@@ -37,7 +37,7 @@ def killed_after_its_end(tmp_path, monkeypatch):
   (run_dir / layout.LOCK).write_text(json.dumps(
       {"pid": pid, "host": socket.gethostname(), "started": "2026-12-07 20:00:00 UTC"}))
   assert owner.writer_of(run_dir) is None  # no one holds it: readers read on
-  assert report_runs.load_run(run_dir).finished
+  assert report_runs.read(run_dir).finished
   return run_dir, pid
 
 

@@ -213,7 +213,7 @@ def test_the_task_alone_study_trains_the_plans_set2_rows_on_one_task_beside_the_
 
   def run(seed, successes, task_set):
     evaluations = [{"step": 50 * (i + 1), "dice/success": s} for i, s in enumerate(successes)]
-    return report_runs.Run(path=pathlib.Path("x"), config=config, evaluations=evaluations,
+    return report_runs.LabelledRun(path=pathlib.Path("x"), config=config, evaluations=evaluations,
                            metrics=[], experiment="task-alone", method=Method.of(config),
                            task_set=task_set, seed=seed, scale="cpu")
 

@@ -343,7 +343,7 @@ def check_runnable(plan: Plan) -> None:
 
 
 def run(plan_path, out, *, progress: bool = False, log=print) -> list[pathlib.Path]:
-  """Run (or continue) every run of the plan in `out`; the plan is copied there first. A run
+  """LabelledRun (or continue) every run of the plan in `out`; the plan is copied there first. A run
   that another process is writing is passed by, so that the same command started twice
   trains two runs side by side."""
   from discosyn_jax.run import owner
@@ -430,7 +430,7 @@ def scores(runs, tasks_, score: str, final_k: int) -> np.ndarray | None:
 
 
 def verdicts(plan: Plan, runs) -> list[Verdict]:
-  """Each hypothesis of `plan` judged on `runs` (report_runs.Run, those of its folder)."""
+  """Each hypothesis of `plan` judged on `runs` (report_runs.LabelledRun, those of its folder)."""
   def of(row: Row):
     if row.records:
       wanted = {plan.record(row, seed).resolve() for seed in row.seeds}

@@ -41,7 +41,7 @@ from discosyn_jax.checks import BadInput
 from discosyn_jax.experiments import confirm, intervals, record, report_figures
 from discosyn_jax.experiments.method import Method
 from discosyn_jax.experiments.presets import REWARDED
-from discosyn_jax.experiments.report_runs import FINAL_K, Run, find, order
+from discosyn_jax.experiments.report_runs import FINAL_K, LabelledRun, find, order
 from discosyn_jax import tasks
 from discosyn_jax.tasks import TASK_SETS
 
@@ -65,7 +65,7 @@ def paper_row(method: Method) -> str:
 
 
 # -- tables ---------------------------------------------------------------------
-def _success(runs: list[Run], task: str) -> np.ndarray:
+def _success(runs: list[LabelledRun], task: str) -> np.ndarray:
   return np.array([r.final[f"{task}/success"] for r in runs if f"{task}/success" in r.final])
 
 
@@ -85,23 +85,23 @@ def _cell(values: np.ndarray, threshold: float, paper: str | None) -> str:
   return f"{mark} {_percent(values)} [{values.size}]{paper_mark}"
 
 
-def _mean_success(run: Run, task_names, over_curve: bool) -> float | None:
+def _mean_success(run: LabelledRun, task_names, over_curve: bool) -> float | None:
   """A run's success averaged over `task_names`, at its end (the mean of its last k
-  evaluations, Run.final) or averaged over all its evaluations (the mean over the curve);
+  evaluations, LabelledRun.final) or averaged over all its evaluations (the mean over the curve);
   None where one is missing."""
   rows = run.evaluations if over_curve else [run.final] if run.evaluations else []
   values = [row.get(f"{t}/success") for row in rows for t in task_names]
   return float(np.mean(values)) if values and None not in values else None
 
 
-def _mean_over_tasks(group: list[Run], task_names, over_curve: bool = False) -> str:
+def _mean_over_tasks(group: list[LabelledRun], task_names, over_curve: bool = False) -> str:
   """Each seed's success averaged over the set's tasks (`_mean_success`), then the mean
   (min-max) over seeds: the figure the targets for a learned decoder compare."""
   per_seed = [_mean_success(r, task_names, over_curve) for r in group]
   return _percent(np.array([v for v in per_seed if v is not None]))
 
 
-def _closing_over_tasks(group: list[Run], task_names) -> str:
+def _closing_over_tasks(group: list[LabelledRun], task_names) -> str:
   """Each seed's closing evaluation averaged over the set's tasks, then the mean (min-max)
   [seeds] over the seeds that have one."""
   values = np.array([np.mean([r.closing[f"{t}/success"] for t in task_names]) for r in group
@@ -109,7 +109,7 @@ def _closing_over_tasks(group: list[Run], task_names) -> str:
   return f"{_percent(values)} [{values.size}]" if values.size else "–"
 
 
-def solved_tables(runs: list[Run], threshold: float) -> str:
+def solved_tables(runs: list[LabelledRun], threshold: float) -> str:
   lines = []
   main = [r for r in runs if r.main]
   for task_set in sorted({r.task_set for r in main}):
@@ -163,7 +163,7 @@ def variance_table(fits: list[dict[str, Any]]) -> str:
   return "\n".join(lines) + "\n"
 
 
-def decoder_table(runs: list[Run], last: int = 10) -> str:
+def decoder_table(runs: list[LabelledRun], last: int = 10) -> str:
   """Is the synergy space learned? Per run with a decoder: its movement from the initial
   decoder at the end (diagnostics.py), the gradient norms of decoder and heads, and the
   discriminator's bonus beside the env's reward per step (means over the last `last` logged
@@ -188,7 +188,7 @@ def decoder_table(runs: list[Run], last: int = 10) -> str:
   return "\n".join(lines) + "\n" if len(lines) > 2 else ""
 
 
-def residual_table(runs: list[Run], last: int = 10) -> str:
+def residual_table(runs: list[LabelledRun], last: int = 10) -> str:
   """Do the synergies still do the work? Per method, set and task with a residual beside
   the decoder: the mean |D(z)| and rho |r| per actuator, and their ratio, over the last `last`
   logged train steps (agent/residual.py), over seeds."""
@@ -222,7 +222,7 @@ def _spread(values) -> str:
   return f"{values.mean():.2f}{spread} [{values.size}]"
 
 
-def discovery_table(runs: list[Run]) -> str:
+def discovery_table(runs: list[LabelledRun]) -> str:
   """Is the synergy space discovered? Per method and set with a decoder: the overlaps
   (diagnostics.py) of the seeds' learned subspaces, pair by pair, beside those of the same
   seeds' initial decoders; each seed's overlap with its own start, and with the planted
@@ -249,7 +249,7 @@ def discovery_table(runs: list[Run]) -> str:
   return "\n".join(lines) + "\n" if len(lines) > 2 else ""
 
 
-def _last_logged(run: Run) -> dict[str, Any]:
+def _last_logged(run: LabelledRun) -> dict[str, Any]:
   """The decoder's figures at the last logged train step of a run ({} if none): the
   overlap with its start derived from the cosines for logs older than that metric."""
   rows = [r for r in run.metrics if "decoder/change" in r]
@@ -263,7 +263,7 @@ def _last_logged(run: Run) -> dict[str, Any]:
   return end
 
 
-def first_reward(run: Run, task: str) -> int | None:
+def first_reward(run: LabelledRun, task: str) -> int | None:
   """Env steps of the task until the first non-zero reward of `task` in training, or None
   when none was seen (or the run did not log it)."""
   cfg = run.config
@@ -275,7 +275,7 @@ def first_reward(run: Run, task: str) -> int | None:
   return None
 
 
-def steps_to(run: Run, task: str, threshold: float) -> int | None:
+def steps_to(run: LabelledRun, task: str, threshold: float) -> int | None:
   """Env steps of the task until the first evaluation at which its success reached
   `threshold`; None when none did."""
   for row in run.evaluations:
@@ -298,7 +298,7 @@ def _steps(values: list[int | None], none: str) -> str:
   return text
 
 
-def frozen_table(group: list[Run], threshold: float, first_rewards: bool) -> str:
+def frozen_table(group: list[LabelledRun], threshold: float, first_rewards: bool) -> str:
   """Transfer or the sparse valve: per method and task over seeds, the final success, the
   mean success over the evaluation curve (how soon, not only how far), the env steps to
   `threshold` success and, for a sparse reward, to the first reward."""
@@ -325,7 +325,7 @@ def frozen_table(group: list[Run], threshold: float, first_rewards: bool) -> str
 SCORES = {"final": "final success", "curve": "mean over the curve"}
 
 
-def score_matrices(runs: list[Run], task_names) -> dict[str, dict[str, np.ndarray]]:
+def score_matrices(runs: list[LabelledRun], task_names) -> dict[str, dict[str, np.ndarray]]:
   """Per score and method, a runs x tasks matrix of success: every finished run that has
   each task (an unfinished run's last evaluation is not its end)."""
   matrices = {kind: {} for kind in SCORES}
@@ -412,7 +412,7 @@ def interval_table(matrices: dict[str, dict[str, np.ndarray]], default: str | No
   return "\n".join(lines) + "\n"
 
 
-def residual_methods(runs: list[Run], methods) -> list[Method]:
+def residual_methods(runs: list[LabelledRun], methods) -> list[Method]:
   """The set's learned-synergy rows with a residual (their decoder frozen on unseen tasks and
   the sparse valve), each measured against the others in a table of its own."""
   with_residual = {r.method for r in runs if r.config.residual > 0}
@@ -441,7 +441,7 @@ def profile_rows(matrices: dict[str, dict[Method, np.ndarray]], default: Method 
   return [m for m in final if m in chosen]
 
 
-def interval_section(runs: list[Run], task_set: str, out: pathlib.Path) -> list[str]:
+def interval_section(runs: list[LabelledRun], task_set: str, out: pathlib.Path) -> list[str]:
   """A set's interval table and its performance-profile figure, as lines of the report."""
   task_names = list(dict.fromkeys(t for r in runs for t in r.config.tasks))
   matrices = score_matrices(runs, task_names)
@@ -461,7 +461,7 @@ def interval_section(runs: list[Run], task_set: str, out: pathlib.Path) -> list[
   return lines
 
 
-def improvement_of(runs: list[Run], task_set: str, x: str | Method, y: str | Method,
+def improvement_of(runs: list[LabelledRun], task_set: str, x: str | Method, y: str | Method,
                    task_names=None) -> dict[str, intervals.Estimate]:
   """P(x > y) per score for any two rows of a set (a row by its name or its Method), over
   its tasks or `task_names` alone: the comparisons the tables do not hold (two controls, one

@@ -8,10 +8,10 @@ import pathlib
 
 import numpy as np
 
-from discosyn_jax.experiments.report_runs import Run, order
+from discosyn_jax.experiments.report_runs import LabelledRun, order
 
 
-def curves(runs: list[Run], path: pathlib.Path, title: str, metric: str = "success") -> pathlib.Path:
+def curves(runs: list[LabelledRun], path: pathlib.Path, title: str, metric: str = "success") -> pathlib.Path:
   """Evaluation `metric` against env steps of each task: a panel per task, a line per
   method (mean over seeds; the band spans the seeds)."""
   import matplotlib
@@ -60,7 +60,7 @@ def _band(ax, label: str, series: list[list[tuple[float, float]]]) -> None:
                     color=line.get_color(), alpha=0.2)
 
 
-def overlap_curves(runs: list[Run], path: pathlib.Path, title: str) -> pathlib.Path | None:
+def overlap_curves(runs: list[LabelledRun], path: pathlib.Path, title: str) -> pathlib.Path | None:
   """The decoder's overlap with the planted span and with its own start against env steps
   of each task, as logged every train step: a line per method (mean over seeds, band)."""
   import matplotlib
@@ -124,7 +124,7 @@ def profiles(scores: dict[str, dict[str, np.ndarray]], path: pathlib.Path, title
   return _save(fig, axes, title, path)
 
 
-def tsne(run: Run, path: pathlib.Path) -> pathlib.Path:
+def tsne(run: LabelledRun, path: pathlib.Path) -> pathlib.Path:
   """t-SNE of the z the deterministic policy picks on each task (the paper's Fig. 6): the
   run's z samples (record.z_of: its z.npz, else drawn from its checkpoint)."""
   import matplotlib

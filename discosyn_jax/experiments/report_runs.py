@@ -29,7 +29,7 @@ FINAL_K = folder.FINAL_K
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
-class Run(folder.Run):
+class LabelledRun(folder.Run):
   """A run as the report reads it (folder.Run), with the labels its tables group it by."""
   experiment: str
   method: Method
@@ -95,7 +95,8 @@ def set_of(config: TrainConfig) -> str:
   return "+".join(tasks.label(task) for task in config.tasks)  # one's own task by its class
 
 
-def load_run(path: pathlib.Path) -> Run:
+def read(path: pathlib.Path) -> LabelledRun:
+  """The run or record at `path` with the labels the report groups it by."""
   from discosyn_jax.run import checkpoints, owner
 
   config = record.saved_config(path)  # its decoder_from found where the folder is now
@@ -109,9 +110,9 @@ def load_run(path: pathlib.Path) -> Run:
   if config.hand != hands.DEFAULT:  # another hand's runs are never pooled with ours
     task_set = f"{task_set} on {hands.label(config.hand)}"
   fields = {f.name: getattr(run, f.name) for f in dataclasses.fields(folder.Run)}
-  return Run(**{**fields, "path": path}, experiment=meta.get("experiment", "train"),
-             method=_method(path, meta) if "method" in meta else method_of(config),
-             task_set=task_set, seed=meta.get("seed", config.seed), scale=meta.get("scale"))
+  return LabelledRun(**{**fields, "path": path}, experiment=meta.get("experiment", "train"),
+                     method=_method(path, meta) if "method" in meta else method_of(config),
+                     task_set=task_set, seed=meta.get("seed", config.seed), scale=meta.get("scale"))
 
 
 def _method(path: pathlib.Path, meta: dict[str, Any]) -> Method:
@@ -121,7 +122,7 @@ def _method(path: pathlib.Path, meta: dict[str, Any]) -> Method:
     raise RecordError(f"{path / layout.EXPERIMENT_FILE}: method: {err}") from None
 
 
-def find(paths, inside: bool = False, final_k: int = FINAL_K) -> tuple[list[Run], list[dict[str, Any]]]:
+def find(paths, inside: bool = False, final_k: int = FINAL_K) -> tuple[list[LabelledRun], list[dict[str, Any]]]:
   """The runs and the synergy fits in `paths` (run folders, fit folders, or folders of them),
   each run's final success the mean of its last `final_k` evaluations. A folder named here
   must hold one; one found inside (a report, say) may hold none."""
@@ -132,7 +133,7 @@ def find(paths, inside: bool = False, final_k: int = FINAL_K) -> tuple[list[Run]
     if not path.is_dir():
       raise BadInput(f"{path} is not a folder")
     if (path / layout.CONFIG_FILE).is_file():
-      runs.append(dataclasses.replace(load_run(path), final_k=final_k))
+      runs.append(dataclasses.replace(read(path), final_k=final_k))
     elif (path / record.FIT_FILE).is_file():
       fits.append(record_files.read_object(path / record.FIT_FILE))
     else:
@@ -147,7 +148,7 @@ def find(paths, inside: bool = False, final_k: int = FINAL_K) -> tuple[list[Run]
   return runs, fits
 
 
-def _one_run_per_seed(runs: list[Run]) -> None:
+def _one_run_per_seed(runs: list[LabelledRun]) -> None:
   """Two runs of one method and seed would count as two seeds: name the pair instead."""
   seen = {}
   for run in runs:

@@ -27,7 +27,7 @@ The tables (every cell a number, an interval, a count or one verdict word):
   headline      README's one table of results
 
 Definitions are the report's (report.py): a run's final success is the mean of its last
-FINAL_K evaluations (report_runs.Run.final); a task is solved where the mean over seeds of
+FINAL_K evaluations (report_runs.LabelledRun.final); a task is solved where the mean over seeds of
 its final success is >= THRESHOLD; "over the curve": the success averaged over every
 evaluation of the run. A mean over seeds is of each seed's mean over the tasks. Intervals:
 intervals.mean_difference, the 95 % stratified bootstrap of the difference of the means
@@ -52,7 +52,7 @@ from discosyn_jax import config as config_lib
 from discosyn_jax.checks import BadInput
 from discosyn_jax.experiments import confirm, intervals, report, report_runs
 from discosyn_jax.experiments.method import Method
-from discosyn_jax.experiments.report_runs import Run
+from discosyn_jax.experiments.report_runs import LabelledRun
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]  # the repository, where it is one
 RECORDS = pathlib.Path("docs", "results")
@@ -105,16 +105,16 @@ class Records:
                               "clone of the repository, not an installed package")
 
   @functools.cache
-  def folder(self, name: str) -> tuple[Run, ...]:
+  def folder(self, name: str) -> tuple[LabelledRun, ...]:
     """Every finished run of a folder of records (a run folder, or a folder of them)."""
     runs, _ = report_runs.find([self.base / name])
     return tuple(r for r in runs if r.finished and r.evaluations)
 
-  def runs(self, names) -> list[Run]:
+  def runs(self, names) -> list[LabelledRun]:
     return [run for name in names for run in self.folder(name)]
 
   @functools.cache
-  def pooled(self, label: str) -> tuple[Run, ...]:
+  def pooled(self, label: str) -> tuple[LabelledRun, ...]:
     """A pooled set #2 row: its records, checked to train one config on distinct seeds, and
     those that may join it where their config is the same run."""
     _, required, optional = next(row for row in POOLED_SET2 if row[0] == label)
@@ -132,7 +132,7 @@ class Records:
       raise BadInput(f"{label}: a seed twice among {seeds}")
     return tuple(sorted(runs, key=lambda r: r.seed))
 
-  def paper(self, task_set: str) -> dict[Method, list[Run]]:
+  def paper(self, task_set: str) -> dict[Method, list[LabelledRun]]:
     """The paper's records of a task set (Tables I and II, transfer, the sparse valve), by
     method in the report's order of rows."""
     runs = [r for r in self.folder("paper") if r.task_set == task_set]
@@ -145,12 +145,12 @@ def tasks_of(runs) -> list[str]:
   return list(dict.fromkeys(t for r in runs for t in r.config.tasks))
 
 
-def final(run: Run, task_names) -> float:
+def final(run: LabelledRun, task_names) -> float:
   """A run's final success (the mean of its last k evaluations) averaged over tasks."""
   return float(np.mean([run.final[f"{t}/success"] for t in task_names]))
 
 
-def curve(run: Run, task_names) -> float:
+def curve(run: LabelledRun, task_names) -> float:
   """A run's success averaged over its evaluations and tasks."""
   return float(np.mean([run.curve[t] for t in task_names]))
 

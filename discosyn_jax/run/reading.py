@@ -69,14 +69,7 @@ def find_run_dir(path: pathlib.Path) -> pathlib.Path:
   raise BadInput(f"{path} is not a run directory or a checkpoint in one")
 
 
-def load_run(path: pathlib.Path) -> tuple[TrainConfig, pathlib.Path]:
-  """(config, checkpoint) of a run directory (its newest good checkpoint) or a checkpoint
-  folder."""
-  config, checkpoint, _ = read_run(path, checkpoints.verify)
-  return config, checkpoint
-
-
-def read_run(path: pathlib.Path, read,
+def newest(path: pathlib.Path, read,
              warn=checkpoints.warn) -> tuple[TrainConfig, pathlib.Path, Any]:
   """(config, checkpoint, read(checkpoint)) of a run directory (its newest checkpoint that
   `read` takes, a snapshot even of a run being written: checkpoints.read_newest) or of a

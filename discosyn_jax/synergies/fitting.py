@@ -252,7 +252,7 @@ def read(path: str | pathlib.Path) -> tuple[dict[str, Any], dict]:
     kept = path / layout.DECODER_FILE
     if kept.is_file() and not checkpoints.candidates(path):  # a record without checkpoints
       return read(kept)
-    config, _, flat = reading.read_run(path, lambda c: checkpoints.read_arrays(c, _RUN_DECODER))
+    config, _, flat = reading.newest(path, lambda c: checkpoints.read_arrays(c, _RUN_DECODER))
     if config.kind.full_action:
       raise BadInput(f"{path} is a full-action run: it has no synergy decoder")
     meta = meta_of(config)

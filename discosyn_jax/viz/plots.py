@@ -25,8 +25,8 @@ _PER_TASK = ("policy_loss", "value_loss", "entropy_z")
 _SHARED = ("loss", "entropy_a", "discriminator_loss", "grad_norm")
 
 
-def read_run(run_dir: pathlib.Path) -> tuple[config_lib.TrainConfig, list[dict], list[dict]]:
-  """(config, metrics rows, eval rows) of a run directory (folder.read)."""
+def _read(run_dir: pathlib.Path) -> tuple[config_lib.TrainConfig, list[dict], list[dict]]:
+  """(config, metrics rows, eval rows) of a run directory that has trained (folder.read)."""
   run_dir = pathlib.Path(run_dir)
   if not (run_dir / layout.CONFIG_FILE).is_file():
     raise BadInput(f"{run_dir} holds no run (no config.json)")
@@ -93,7 +93,7 @@ def run_curves(run_dir: pathlib.Path, out_dir: pathlib.Path) -> list[pathlib.Pat
   """Write success.png, return.png and losses.png of the run in `run_dir` into `out_dir`
   (replacing them: they are drawn from the run's logs); return their paths."""
   run_dir, out_dir = pathlib.Path(run_dir), pathlib.Path(out_dir)
-  config, metrics, evals = read_run(run_dir)
+  config, metrics, evals = _read(run_dir)
   out_dir.mkdir(parents=True, exist_ok=True)
   name = run_dir.resolve().name
   paths = [out_dir / curve for curve in CURVES]
