@@ -6,7 +6,9 @@ the tasks solved (>= 0.8), the mean over the curve up to it; and how far the dec
 moved by then (metrics.jsonl: |W - W0| / |W0|, the smallest principal cosine to its start,
 the overlap with it). Then the first budget at which the run solves every task, and its
 decoder's overlap at the end with a reference space (the default's learned decoder of the
-same seed, docs/results/paper/discosyn3-l-reward-set1-seed<seed>).
+same seed, docs/results/paper/discosyn3-l-reward-set1-seed<seed>); and, for a row with two
+seeds or more, how far their learned spaces agree at the end (the overlap of each pair,
+beside a random pair's).
 
   python -m studies.paper_budget RUN ... [--reference-folder docs/results/paper]
 
@@ -98,6 +100,24 @@ def table(runs, reference: pathlib.Path) -> str:
           + "\n".join(ends) + "\n")
 
 
+def across_seeds(runs) -> str:
+  """Per row with two seeds or more: the overlap of each pair of seeds' learned spaces at the
+  end, and a random pair's (chance)."""
+  from discosyn_jax.synergies import diagnostics, discovery
+
+  lines = ["| row | seeds | overlap of each pair at the end | chance |", "|---|---|---|---|"]
+  for method in dict.fromkeys(run.method for run in runs):
+    group = sorted((r for r in runs if r.method == method), key=lambda r: r.seed)
+    bases = [discovery.learned_basis(r.path) for r in group]
+    if len(group) < 2 or any(b is None for b in bases):
+      continue
+    pairs = discovery.cross_seed(bases)
+    lines.append(f"| {method} | {', '.join(str(r.seed) for r in group)} | "
+                 f"{' / '.join(f'{v:.3f}' for v in pairs)} | "
+                 f"{diagnostics.chance_overlap(bases[0].shape[1], bases[0].shape[1]):.2f} |")
+  return "\n".join(lines) + "\n"
+
+
 def main(argv=None) -> None:
   parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
   parser.add_argument("runs", nargs="+", type=pathlib.Path)
@@ -109,6 +129,7 @@ def main(argv=None) -> None:
 
   runs, _ = report_runs.find(args.runs)
   print(table(runs, args.reference_folder))
+  print(across_seeds(runs))
 
 
 if __name__ == "__main__":

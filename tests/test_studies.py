@@ -268,3 +268,10 @@ def test_the_paper_budget_study_reads_success_and_drift_at_each_budget(capsys):
   out = capsys.readouterr().out
   assert "| discosyn3-l-reward-set1-seed0 | 1x | 1.54 M |" in out and "2x" not in out
   assert budget.reference_overlap(run, ROOT / "docs/results/paper") == pytest.approx(1.0, abs=1e-5)
+  # the reward prior starts every seed in one space: their ends agree, far above chance
+  runs = report_runs.find([ROOT / f"docs/results/paper/discosyn3-l-reward-set1-seed{s}"
+                           for s in (0, 1)])[0]
+  [row] = [line for line in budget.across_seeds(runs).splitlines() if line.startswith("| DiscoSyn3")]
+  _, method, seeds, pair, chance, _ = row.split("|")
+  assert (method.strip(), seeds.strip(), chance.strip()) == ("DiscoSyn3-L-reward", "0, 1", "0.15")
+  assert 0.9 < float(pair) <= 1.0 + 1e-6
