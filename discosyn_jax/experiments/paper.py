@@ -50,7 +50,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import pathlib
-from typing import Any
+from typing import Any, ClassVar
 
 import jax
 import numpy as np
@@ -181,21 +181,29 @@ class Train:
 
 
 @dataclasses.dataclass
-class Fit:
-  """Collect a full-action run's deterministic actions; fit PCA and autoencoders to them."""
-  name: str  # the folder of synergy files in OUT
-  source: str  # the full-action run's folder in OUT
-  episodes: int
-  autoencoder_steps: int
-  hidden: tuple[int, ...]
-  meta: dict[str, Any]
+class FromRun:
+  """A step that writes FILE into its folder from a run's (`source`): done once it is there."""
+  name: str  # its folder in OUT
+  source: str  # the run's folder in OUT
+  FILE: ClassVar[str]
 
   @property
   def needs(self) -> tuple[str, ...]:
     return (self.source,)
 
   def done(self, out: pathlib.Path) -> bool:
-    return (out / self.name / record.FIT_FILE).is_file()
+    return (out / self.name / self.FILE).is_file()
+
+
+@dataclasses.dataclass
+class Fit(FromRun):
+  """Collect a full-action run's deterministic actions; fit PCA and autoencoders to them
+  (synergy files in its folder)."""
+  episodes: int
+  autoencoder_steps: int
+  hidden: tuple[int, ...]
+  meta: dict[str, Any]
+  FILE = record.FIT_FILE  # written last: its presence marks the step done
 
   def run(self, out: pathlib.Path, progress: bool, log) -> None:
     trainer, state = assemble.load(out / self.source)
@@ -233,21 +241,12 @@ def fitted_meta(method: str, k: int, hidden: tuple[int, ...]) -> dict[str, Any]:
 
 
 @dataclasses.dataclass
-class Match:
+class Match(FromRun):
   """Write the decoder of a `-matched` control: the random initial subspace of a linear
   DiscoSyn run's seed carrying that run's learned singular values, bias and noise (read
   from the record of that run)."""
-  name: str  # the folder of the synergy file in OUT
-  source: str  # the DiscoSyn run's folder in OUT
   meta: dict[str, Any]
   FILE = layout.DECODER_FILE
-
-  @property
-  def needs(self) -> tuple[str, ...]:
-    return (self.source,)
-
-  def done(self, out: pathlib.Path) -> bool:
-    return (out / self.name / self.FILE).is_file()
 
   def run(self, out: pathlib.Path, progress: bool, log) -> None:
     from discosyn_jax.agent import networks
