@@ -238,10 +238,13 @@ def names() -> tuple[str, ...]:
   return tuple(REGISTRY)
 
 
+FAMILIES = (valve, dice, weight_pull, screw, valve_goal, planted)  # the modules of our tasks
+
+
 def _register_ours() -> None:
   """Our tasks, through `register` as a task of one's own: each family module lists its own
   (TASKS: name -> task, default config, summary)."""
-  for family in (valve, dice, weight_pull, screw, valve_goal, planted):
+  for family in FAMILIES:
     for name, (task, default_config, summary) in family.TASKS.items():
       register(name, task, default_config, summary)
 
