@@ -228,7 +228,7 @@ class TrainConfig:
       raise BadInput(f"a task is listed twice: {', '.join(self.tasks)}")
     if not self.hand:
       raise BadInput("no hand given")
-    kind = decoders.kind(self.decoder)  # an unknown name fails here
+    kind = self.kind  # an unknown name fails here
     if kind.full_action:
       if self.alpha2 or self.alpha3:
         raise BadInput("the identity decoder (full-action PPO) has no discriminator or decoder "

@@ -33,6 +33,10 @@ FAMILIES = ("PPO", "PCA", "AE", "DiscoSyn", "Random", "Prior")
 STARTS = ("reward", "objects")  # a decoder's start as the name says it; random says nothing
 CONTROLS = ("matched", "zfree")
 REUSES = ("frozen", "tuned")  # how a space learned on some tasks is used on others
+# a config's switches a name carries as a part of its own: each task's own decoder noise,
+# each task's bonus capped at what it pays (Method.of writes them, rows.config_for reads them)
+SWITCH_TAGS = {"task_noise": "tasknoise", "bonus_cap": "bonuscap"}
+FLOOR_TAG = "zfloor"  # a floor on the heads' z std until paid: 'zfloor0.7'
 
 
 @dataclasses.dataclass(frozen=True)
@@ -162,11 +166,8 @@ class Method:
     came from, which the config does not say."""
     get = _getter(source)
     floor = get("z_std_floor", 0.0) or 0.0  # the heads held open until paid
-    tag = (f"zfloor{floor:g}",) if floor else ()
-    if get("task_noise"):  # each task's own decoder noise
-      tag += ("tasknoise",)
-    if get("bonus_cap"):  # each task's bonus capped at what it pays
-      tag += ("bonuscap",)
+    tag = (f"{FLOOR_TAG}{floor:g}",) if floor else ()
+    tag += tuple(part for field, part in SWITCH_TAGS.items() if get(field))
     kind = decoders.kind(get("decoder"))
     if kind.full_action:
       return cls("PPO", tag=tag)

@@ -55,13 +55,12 @@ from typing import Any, ClassVar
 import jax
 import numpy as np
 
-from discosyn_jax import decoders, tasks
+from discosyn_jax import assemble, decoders, tasks
 from discosyn_jax.checks import BadInput
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.env import hands
 from discosyn_jax.run import layout
 from discosyn_jax.synergies import fitting
-from discosyn_jax import assemble
 from discosyn_jax.training import evaluation
 from discosyn_jax.experiments import presets, record, rows
 from discosyn_jax.experiments.method import Method, Residual
@@ -236,8 +235,9 @@ class Fit(FromRun):
 
 def fitted_meta(method: str, k: int, hidden: tuple[int, ...]) -> dict[str, Any]:
   """The meta of a fitted synergy file: the decoder it is, and the method that made it."""
-  return dict(decoder=(decoders.LINEAR if method == "PCA" else decoders.MLP).name, n_synergies=k, decoder_bias=True,
-              decoder_hidden=hidden, method=method)
+  kind = decoders.LINEAR if method == "PCA" else decoders.MLP
+  return dict(decoder=kind.name, n_synergies=k, decoder_bias=True, decoder_hidden=hidden,
+              method=method)
 
 
 @dataclasses.dataclass
@@ -288,8 +288,8 @@ class Planner:
 
   def row(self, method: Method, task_set: str) -> TrainConfig:
     """The config of row `method` on `task_set` at this scale and seed (rows.config_for)."""
-    return self._config(rows.config_for(method, task_set, tasks=tuple(self.sets[task_set]),
-                                        **self.sizes.train_for(task_set)), task_set)
+    return rows.config_for(method, task_set, tasks=tuple(self.sets[task_set]), seed=self.seed,
+                           hand=self.hand, **self.sizes.train_for(task_set))
 
   def with_residual(self, method: Method, task_set: str) -> Method:
     """`method` beside the preset residual (presets.RESIDUAL: its ramp a share of the run),

@@ -16,10 +16,11 @@ from discosyn_jax import decoders
 from discosyn_jax.checks import BadInput
 from discosyn_jax.config import TrainConfig
 from discosyn_jax.experiments import presets
-from discosyn_jax.experiments.method import Method
+from discosyn_jax.experiments.method import FLOOR_TAG, SWITCH_TAGS, Method
 from discosyn_jax.tasks import TASK_SETS
 
-_FLOOR = re.compile(r"zfloor(?P<floor>\d+(?:\.\d+)?)")
+_FLOOR = re.compile(re.escape(FLOOR_TAG) + r"(?P<floor>\d+(?:\.\d+)?)")
+_SWITCHES = {part: field for field, part in SWITCH_TAGS.items()}
 
 
 def tagged(method: Method) -> dict:
@@ -28,10 +29,8 @@ def tagged(method: Method) -> dict:
   fields = {}
   for part in method.tag:
     floor = _FLOOR.fullmatch(part)
-    if part == "tasknoise":
-      fields["task_noise"] = True
-    elif part == "bonuscap":
-      fields["bonus_cap"] = True
+    if part in _SWITCHES:
+      fields[_SWITCHES[part]] = True
     elif floor:
       fields["z_std_floor"] = float(floor["floor"])
     else:
